@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package springy needs to build, run and test.
+# The one list of dependencies: the README's commands and .ci/run both call this.
+set -euo pipefail
+packages=(
+  build-essential cmake pkg-config git ca-certificates
+  libeigen3-dev          # sparse linear algebra (implicit integrator)
+  libassimp-dev          # mesh import (OBJ, PLY, STL, glTF)
+  libtomlplusplus-dev    # scene files
+  libcli11-dev           # command line
+  libmeshoptimizer-dev   # mesh simplification
+  libosmesa6-dev         # offscreen OpenGL (Mesa llvmpipe)
+  libglm-dev             # camera and transform maths for the renderer
+  libstb-dev             # stb_image_write (PNG), stb_truetype (overlay text)
+  fonts-dejavu-core      # the overlay font
+  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev  # MP4 encoding
+  libx264-dev            # pulled in by libavcodec; listed so H.264 is never missing
+  libgtest-dev libgmock-dev   # tests
+  libbenchmark-dev       # benchmarks
+  gnuplot-nox            # plots in the accuracy study
+)
+SUDO=""
+if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
+export DEBIAN_FRONTEND=noninteractive
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

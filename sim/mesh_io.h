@@ -1,0 +1,50 @@
+// springy: loading triangle meshes from files, welding, validation and simplification.
+//
+// A soft body must be one closed, consistently oriented 2-manifold: every edge shared by exactly
+// two triangles that traverse it in opposite directions, one connected piece, no degenerate
+// triangle. Files from the wild rarely arrive that way (split vertices at UV seams, duplicated
+// corners), so loading welds coincident vertices first, then validates, and a mesh that still
+// fails is rejected with the file and the first offending edge or vertex.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+
+#include "sim/mesh.h"
+
+namespace springy {
+
+// Reads every triangle of every mesh in a file assimp understands (OBJ, PLY, STL, glTF, ...),
+// triangulating polygons. Throws springy::Error naming the file when it cannot be read or holds
+// no triangles. No welding or validation here.
+TriMesh readMeshFile(const std::string& path);
+
+// Merges vertices closer than `tolerance` (absolute, in the mesh's units), remaps the triangles
+// and drops triangles that collapse (two equal corners) and unused vertices. Deterministic: the
+// result depends only on the input, never on hash-table iteration order.
+TriMesh weldVertices(const TriMesh& mesh, double tolerance);
+
+// Returns nothing when `mesh` is a single closed, consistently oriented 2-manifold with no
+// zero-area triangle and no unused vertex; otherwise a one-line description of the first problem
+// found, naming the vertex indices, edge or triangle, e.g.
+//   "edge (12, 40) belongs to 1 triangle: the mesh has a hole"
+//   "edge (3, 7) is shared by 3 triangles: non-manifold edge"
+//   "edge (5, 9) is traversed twice in the same direction (triangles 4 and 17): flipped face"
+//   "the mesh has 2 separate pieces (vertex 0 and vertex 8 are not connected)"
+//   "triangle 6 (2, 2, 5) has zero area"
+std::optional<std::string> findManifoldProblem(const TriMesh& mesh);
+
+// Orientation: if the closed mesh encloses negative volume (inside-out), flips every triangle.
+// Returns true if it flipped.
+bool orientOutward(TriMesh& mesh);
+
+// readMeshFile + weldVertices(tolerance relative to the bounding-box diagonal) + validation +
+// orientOutward. Throws springy::Error "PATH: <problem>" when the mesh is not usable as a body.
+TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance = 1e-6);
+
+// Simplifies a closed mesh to about `targetVertices` vertices with meshoptimizer, keeping it a
+// closed manifold (validated afterwards; throws springy::Error if simplification broke it).
+TriMesh simplifyMesh(const TriMesh& mesh, std::size_t targetVertices);
+
+}  // namespace springy

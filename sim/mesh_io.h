@@ -16,13 +16,17 @@
 namespace springy {
 
 // Reads every triangle of every mesh in a file assimp understands (OBJ, PLY, STL, glTF, ...),
-// triangulating polygons. Throws springy::Error naming the file when it cannot be read or holds
-// no triangles. No welding or validation here.
+// triangulating polygons, with node transforms applied (a mirroring transform keeps the winding
+// outward). Points and lines are ignored. Throws springy::Error naming the file when it cannot be
+// read, holds no triangles or has a non-finite coordinate. No welding or validation here.
 TriMesh readMeshFile(const std::string& path);
 
 // Merges vertices closer than `tolerance` (absolute, in the mesh's units), remaps the triangles
-// and drops triangles that collapse (two equal corners) and unused vertices. Deterministic: the
-// result depends only on the input, never on hash-table iteration order.
+// and drops triangles that collapse (two equal corners) and unused vertices. Merging is
+// transitive (a chain of close vertices becomes one). Deterministic: the result depends only on
+// the input, never on hash-table iteration order. Surviving vertices keep their relative input
+// order, each merged vertex the exact position of its lowest-index member, so an already welded
+// mesh comes back unchanged. tolerance <= 0 merges exactly equal positions only.
 TriMesh weldVertices(const TriMesh& mesh, double tolerance);
 
 // Returns nothing when `mesh` is a single closed, consistently oriented 2-manifold with no
@@ -33,6 +37,10 @@ TriMesh weldVertices(const TriMesh& mesh, double tolerance);
 //   "edge (5, 9) is traversed twice in the same direction (triangles 4 and 17): flipped face"
 //   "the mesh has 2 separate pieces (vertex 0 and vertex 8 are not connected)"
 //   "triangle 6 (2, 2, 5) has zero area"
+//   "vertex 5 joins 2 separate fans of triangles: non-manifold vertex"
+// Checks run in this order: non-finite coordinate, index out of range, zero area (below 1e-12 x
+// bounding-box diagonal squared, or repeated corner), unused vertex, non-manifold edge, hole,
+// flipped face, non-manifold vertex, separate pieces. Self-intersection is not checked.
 std::optional<std::string> findManifoldProblem(const TriMesh& mesh);
 
 // Orientation: if the closed mesh encloses negative volume (inside-out), flips every triangle.
@@ -40,11 +48,16 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh);
 bool orientOutward(TriMesh& mesh);
 
 // readMeshFile + weldVertices(tolerance relative to the bounding-box diagonal) + validation +
-// orientOutward. Throws springy::Error "PATH: <problem>" when the mesh is not usable as a body.
+// orientOutward. Throws springy::Error "PATH: <problem>" when the mesh is not usable as a body
+// (including a closed surface that encloses no volume).
 TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance = 1e-6);
 
 // Simplifies a closed mesh to about `targetVertices` vertices with meshoptimizer, keeping it a
-// closed manifold (validated afterwards; throws springy::Error if simplification broke it).
+// closed manifold (validated afterwards; throws springy::Error if simplification broke it). The
+// input must pass findManifoldProblem (springy::Error otherwise). Returns the input unchanged
+// when targetVertices is not below its vertex count; meshoptimizer may stop above the target if
+// topology forbids further collapses. Surviving vertices keep their original double positions
+// and relative order.
 TriMesh simplifyMesh(const TriMesh& mesh, std::size_t targetVertices);
 
 }  // namespace springy

@@ -1,0 +1,81 @@
+// springy: static colliders and continuous vertex contact.
+//
+// One interface for every static collider (the seed had planes and triangles in two code
+// paths that could not be combined): after each step, every vertex's path from its old to its
+// new position is tested against all colliders, and the EARLIEST hit along the path wins. A
+// plane is a solid half-space (one-sided); a triangle mesh is a set of thin two-sided plates
+// searched through a bounding volume hierarchy. At a hit the vertex is put back on the
+// surface (plus a tiny skin), its velocity gets the collider's restitution along the normal
+// and Coulomb friction along the surface (an impulse no larger than mu times the normal
+// impulse), and the rest of its path continues as sliding along the surface.
+//
+// Contact never adds energy: the normal speed after contact is at most the speed before
+// (restitution <= 1), friction only removes tangential speed, and impacts slower than
+// `restingSpeed` are perfectly inelastic, so a body resting on the ground does not jitter.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/mesh.h"
+#include "sim/vec3.h"
+
+namespace springy {
+
+struct ContactMaterial {
+  double restitution = 0.6;  // ratio of rebound to impact normal speed, [0, 1]
+  double friction = 0.3;     // Coulomb coefficient mu >= 0
+};
+
+struct PlaneCollider {
+  Vec3 point;
+  Vec3 normal;  // unit, pointing out of the solid
+  ContactMaterial material;
+};
+
+// A static triangle mesh with its own BVH (built once by the constructor of Colliders).
+struct TriangleCollider {
+  std::string name;
+  TriMesh mesh;
+  ContactMaterial material;
+  // BVH over triangles: nodes in depth-first order; a leaf holds [first, first + count) of
+  // `order`, an inner node has its children at index + 1 and `second`.
+  struct Node {
+    Vec3 lo, hi;
+    uint32_t first = 0, count = 0;  // leaf range (count > 0 for leaves)
+    uint32_t second = 0;            // right child (inner nodes)
+  };
+  std::vector<Node> nodes;
+  std::vector<uint32_t> order;
+  void buildBvh();
+};
+
+struct ContactHit {
+  double fraction;  // position of the hit along the path, [0, 1]
+  Vec3 point;       // on the surface
+  Vec3 normal;      // unit, toward the side the path came from
+  ContactMaterial material;
+};
+
+struct Colliders {
+  std::vector<PlaneCollider> planes;
+  std::vector<TriangleCollider> meshes;
+  double restingSpeed = 0.1;  // impacts slower than this [m/s] do not bounce
+  double skin = 1e-6;         // distance a vertex is kept off a surface [m]
+
+  bool empty() const { return planes.empty() && meshes.empty(); }
+  // Earliest hit on the segment from `from` to `to` over all colliders; false if none.
+  bool firstHit(const Vec3& from, const Vec3& to, ContactHit& hit) const;
+  // Resolves one vertex's path: returns the corrected end position and updates `velocity`.
+  // Returns true if any contact happened.
+  bool resolve(const Vec3& from, Vec3& to, Vec3& velocity) const;
+  // Largest depth of a point behind any plane (0 when in front of all) [m].
+  double planePenetration(const Vec3& p) const;
+};
+
+// Velocity after an impact with a surface of unit normal n (restitution along n, Coulomb
+// friction along the surface). `restingSpeed`: slower impacts are inelastic.
+Vec3 contactVelocity(const Vec3& velocity, const Vec3& n, const ContactMaterial& material, double restingSpeed);
+
+}  // namespace springy

@@ -1,0 +1,48 @@
+// springy: torsion (hinge) springs across shared edges (seed eq. 5-20).
+//
+// The hinge edge runs from v0 to v1; v2 is the third vertex of the left face (v0, v1, v2) and
+// v3 of the right face (v1, v0, v3), both outward-oriented. With h the unit edge direction,
+// n_l, n_r the unit outward normals and r_l, r_r the perpendiculars from the hinge line to v2
+// and v3, the signed dihedral angle is
+//   theta = atan2((n_l x n_r) . h, n_l . n_r)      (0 when flat, > 0 when convex)
+// and its gradient with respect to the four vertices (the seed's force directions) is
+//   g2 = -n_l / |r_l|,  g3 = -n_r / |r_r|,
+//   g1 = -((x02 . h) g2 + (x03 . h) g3) / |x01|,  g0 = -(g1 + g2 + g3).
+// The force is f_i = -(k (theta - theta0) + d dtheta/dt) g_i with dtheta/dt = sum g_i . v_i,
+// the true rate of change of the angle: it is zero for every rigid motion, so rigid motion
+// feels no damping, and the damping power -d (dtheta/dt)^2 never adds energy. (The seed used
+// the wing vertices' absolute normal velocities, which damps plain translation.)
+// The forces sum to zero and have zero net torque because g is the gradient of a function
+// invariant under rigid motion.
+#pragma once
+
+#include <cstddef>
+
+#include "sim/model.h"
+
+namespace springy {
+
+struct HingeGeometry {
+  double theta;   // signed dihedral angle [rad]
+  Vec3 grad[4];   // d theta / d x_i [1/m]
+  double leverLeft, leverRight;  // |r_l|, |r_r| [m]
+};
+
+// Computes the angle and its gradient. Returns false (and leaves g unset) when the geometry
+// is degenerate: a zero-length hinge edge or a wing vertex on the hinge line.
+bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g);
+
+// Signed dihedral angle alone (the same convention as hingeGeometry).
+double dihedralAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3);
+
+// theta - theta0 wrapped into (-pi, pi], so a hinge folded through +-pi is not kicked by 2 pi.
+double angleDifference(double theta, double restAngle);
+
+// Accumulates the forces of hinges [begin, end) into f. Degenerate hinges are skipped for the
+// instant (the stated guard; they are rejected at load when degenerate at rest).
+void applyHinges(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f);
+
+// Elastic energy 1/2 k (theta - theta0)^2 summed over hinges [begin, end).
+double hingeEnergy(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x);
+
+}  // namespace springy

@@ -1,0 +1,198 @@
+#include "sim/model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "sim/error.h"
+#include "sim/hinge.h"
+
+namespace springy {
+namespace {
+
+std::string where(const BodyDesc& desc) { return "body '" + desc.name + "'"; }
+
+double cornerAngle(const Vec3& at, const Vec3& b, const Vec3& c) {
+  const Vec3 u = b - at, w = c - at;
+  return std::atan2(length(cross(u, w)), dot(u, w));
+}
+
+struct DirectedEdge {
+  uint32_t from, to, face;
+  bool operator<(const DirectedEdge& o) const {
+    return from != o.from ? from < o.from : (to != o.to ? to < o.to : face < o.face);
+  }
+};
+
+}  // namespace
+
+Vec3 Wind::airVelocity(double t) const {
+  if (gustStrength == 0.0) return velocity;
+  // Four incommensurate sinusoids around the gust frequency: smooth, repeatable, and without
+  // a visible period.
+  double g = 0.0;
+  for (int i = 0; i < 4; ++i) g += std::sin(2 * kPi * frequency[i] * t + phase[i]);
+  return velocity * (1.0 + gustStrength * 0.5 * g);
+}
+
+std::vector<double> angleWeightedAreas(const TriMesh& mesh) {
+  std::vector<double> share(mesh.positions.size(), 0.0);
+  for (const Triangle& t : mesh.triangles) {
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    const double area = 0.5 * length(cross(b - a, c - a));
+    // The three interior angles sum to pi, so the shares of one face sum to its area.
+    share[t[0]] += area * cornerAngle(a, b, c) / kPi;
+    share[t[1]] += area * cornerAngle(b, c, a) / kPi;
+    share[t[2]] += area * cornerAngle(c, a, b) / kPi;
+  }
+  return share;
+}
+
+void addBody(Model& model, const BodyDesc& desc) {
+  const TriMesh& mesh = desc.mesh;
+  const std::size_t nv = mesh.positions.size();
+  if (nv < 4 || mesh.triangles.size() < 4) {
+    throw Error(where(desc) + ": a closed body needs at least 4 vertices and 4 triangles");
+  }
+  if (!(desc.mass > 0.0) || !std::isfinite(desc.mass)) throw Error(where(desc) + ": mass must be positive");
+  const double size = length(boundsOf(mesh.positions).size());
+
+  // Validate the geometry the forces divide by: edges and faces.
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    for (uint32_t v : t) {
+      if (v >= nv) {
+        throw Error(where(desc) + ": triangle " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
+                    " of " + std::to_string(nv));
+      }
+    }
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    if (!(length(cross(b - a, c - a)) > 1e-12 * size * size)) {
+      throw Error(where(desc) + ": triangle " + std::to_string(f) + " (" + std::to_string(t[0]) + ", " +
+                  std::to_string(t[1]) + ", " + std::to_string(t[2]) + ") has zero area");
+    }
+  }
+
+  BodyInfo info;
+  info.name = desc.name;
+  info.firstVertex = static_cast<uint32_t>(model.mass.size());
+  info.vertexCount = static_cast<uint32_t>(nv);
+  info.firstStrut = static_cast<uint32_t>(model.struts.size());
+  info.firstHinge = static_cast<uint32_t>(model.hinges.size());
+  info.firstFace = static_cast<uint32_t>(model.faces.size());
+  info.faceCount = static_cast<uint32_t>(mesh.triangles.size());
+  info.mass = desc.mass;
+  info.restVolume = signedVolume(mesh.positions, mesh.triangles);
+  info.restSize = size;
+  const uint32_t base = info.firstVertex;
+
+  // Mass: angle-weighted area (seed 3.3.1) or uniform.
+  std::vector<double> m(nv, desc.mass / static_cast<double>(nv));
+  if (desc.massDistribution == MassDistribution::AngleWeightedArea) {
+    const std::vector<double> share = angleWeightedAreas(mesh);
+    double total = 0.0;
+    for (double s : share) total += s;
+    for (std::size_t i = 0; i < nv; ++i) {
+      if (!(share[i] > 0.0)) {
+        throw Error(where(desc) + ": vertex " + std::to_string(i) + " belongs to no triangle (it would get no mass)");
+      }
+      m[i] = desc.mass * share[i] / total;
+    }
+  }
+
+  // Directed edges, sorted, to pair each edge with its twin (the neighbouring face).
+  std::vector<DirectedEdge> edges;
+  edges.reserve(mesh.triangles.size() * 3);
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    for (int k = 0; k < 3; ++k) edges.push_back({t[k], t[(k + 1) % 3], static_cast<uint32_t>(f)});
+  }
+  std::sort(edges.begin(), edges.end());
+  auto findEdge = [&](uint32_t a, uint32_t b) -> const DirectedEdge* {
+    auto it = std::lower_bound(edges.begin(), edges.end(), DirectedEdge{a, b, 0});
+    return it != edges.end() && it->from == a && it->to == b ? &*it : nullptr;
+  };
+  auto thirdVertex = [&](uint32_t face, uint32_t a, uint32_t b) {
+    for (uint32_t v : mesh.triangles[face]) {
+      if (v != a && v != b) return v;
+    }
+    return a;
+  };
+
+  auto strutConstants = [&](uint32_t i, uint32_t j, double& k, double& d) {
+    const double mean = 0.5 * (m[i] + m[j]);
+    k = desc.strutStiffness ? *desc.strutStiffness : stiffnessFromPeriod(mean, desc.strutPeriod);
+    d = desc.strutDamping ? *desc.strutDamping : dampingFromDecay(mean, desc.strutDecay);
+  };
+  auto addStrut = [&](uint32_t i, uint32_t j) {
+    const double rest = length(mesh.positions[j] - mesh.positions[i]);
+    if (!(rest > 1e-12 * size)) {
+      throw Error(where(desc) + ": edge (" + std::to_string(i) + ", " + std::to_string(j) + ") has zero length");
+    }
+    Strut s{base + i, base + j, rest, 0.0, 0.0};
+    strutConstants(i, j, s.stiffness, s.damping);
+    model.struts.push_back(s);
+  };
+
+  const bool useHinges = desc.model == SpringModel::Springy && (desc.hingeStiffness || desc.hingePeriod > 0.0);
+  if (desc.model == SpringModel::AllPairs) {
+    for (uint32_t i = 0; i < nv; ++i) {
+      for (uint32_t j = i + 1; j < nv; ++j) addStrut(i, j);
+    }
+  } else {
+    for (const DirectedEdge& e : edges) {
+      // Each undirected edge once: at its direction with from < to, or at the only direction
+      // it has (a border edge of an open mesh).
+      const DirectedEdge* twin = findEdge(e.to, e.from);
+      if (e.from > e.to && twin) continue;
+      addStrut(e.from, e.to);
+      if (!useHinges || !twin) continue;
+      Hinge h{{base + e.from, base + e.to, base + thirdVertex(e.face, e.from, e.to),
+               base + thirdVertex(twin->face, e.from, e.to)},
+              0.0, 0.0, 0.0};
+      HingeGeometry g;
+      const Vec3 &x0 = mesh.positions[e.from], &x1 = mesh.positions[e.to];
+      if (!hingeGeometry(x0, x1, mesh.positions[h.v[2] - base], mesh.positions[h.v[3] - base], g) ||
+          !(g.leverLeft > 1e-9 * size) || !(g.leverRight > 1e-9 * size)) {
+        throw Error(where(desc) + ": hinge on edge (" + std::to_string(e.from) + ", " + std::to_string(e.to) +
+                    ") has a wing vertex on the hinge line (a sliver face): it has no lever arm");
+      }
+      h.restAngle = g.theta;
+      const double mean = 0.5 * (m[e.from] + m[e.to]);
+      const double r = 0.5 * (g.leverLeft + g.leverRight);  // at rest, once
+      h.stiffness = desc.hingeStiffness ? *desc.hingeStiffness : torsionStiffnessFromPeriod(mean, r, desc.hingePeriod);
+      h.damping = desc.hingeDamping ? *desc.hingeDamping
+                  : desc.hingeDecay > 0.0 ? torsionDampingFromDecay(mean, r, desc.hingeDecay)
+                                          : 0.0;
+      model.hinges.push_back(h);
+    }
+  }
+  info.strutCount = static_cast<uint32_t>(model.struts.size()) - info.firstStrut;
+  info.hingeCount = static_cast<uint32_t>(model.hinges.size()) - info.firstHinge;
+
+  // Vertices, initial velocity (translation + spin about the centroid), pins.
+  Vec3 centroid;
+  for (const Vec3& p : mesh.positions) centroid += p;
+  centroid = centroid / static_cast<double>(nv);
+  std::vector<bool> pinned(nv, false);
+  for (uint32_t p : desc.pinned) {
+    if (p >= nv) {
+      throw Error(where(desc) + ": pinned vertex " + std::to_string(p) + " does not exist (the body has " +
+                  std::to_string(nv) + " vertices)");
+    }
+    pinned[p] = true;
+  }
+  for (uint32_t i = 0; i < nv; ++i) {
+    model.mass.push_back(m[i]);
+    model.invMass.push_back(pinned[i] ? 0.0 : 1.0 / m[i]);
+    model.restPosition.push_back(mesh.positions[i]);
+    model.body.push_back(static_cast<uint32_t>(model.bodies.size()));
+    model.initialVelocity.push_back(
+        pinned[i] ? Vec3{} : desc.velocity + cross(desc.angularVelocity, mesh.positions[i] - centroid));
+    if (pinned[i]) model.pinned.push_back(base + i);
+  }
+  for (const Triangle& t : mesh.triangles) model.faces.push_back({base + t[0], base + t[1], base + t[2]});
+  model.bodies.push_back(info);
+}
+
+}  // namespace springy

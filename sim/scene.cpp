@@ -1,0 +1,575 @@
+#include "sim/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "sim/error.h"
+#include "sim/mesh_io.h"
+#include "sim/shapes.h"
+
+namespace springy {
+namespace {
+
+std::string location(const std::string& path, const toml::source_region& r) {
+  return path + ":" + std::to_string(r.begin.line) + ":" + std::to_string(r.begin.column);
+}
+
+// Reads the keys of one table, remembering which were read, so that finish() can reject the
+// rest as unknown (pbrt's ReportUnused). Every error carries file:line:column and the key.
+class Reader {
+ public:
+  Reader(const toml::table& table, const std::string& path, std::string section)
+      : table_(table), path_(path), section_(std::move(section)) {}
+
+  [[noreturn]] void fail(const toml::node& node, std::string_view key, const std::string& message) const {
+    throw Error(location(path_, node.source()) + ": " + section_ + " key '" + std::string(key) + "': " + message);
+  }
+  [[noreturn]] void failHere(const std::string& message) const {
+    throw Error(location(path_, table_.source()) + ": " + section_ + ": " + message);
+  }
+
+  const toml::node* get(std::string_view key) {
+    used_.push_back(std::string(key));
+    return table_.get(key);
+  }
+  bool has(std::string_view key) const { return table_.contains(key); }
+
+  double number(std::string_view key, double fallback) {
+    const toml::node* n = get(key);
+    return n ? asNumber(*n, key) : fallback;
+  }
+  std::optional<double> optionalNumber(std::string_view key) {
+    const toml::node* n = get(key);
+    return n ? std::optional<double>(asNumber(*n, key)) : std::nullopt;
+  }
+  double positive(std::string_view key, double fallback) {
+    const toml::node* n = get(key);
+    if (!n) return fallback;
+    const double value = asNumber(*n, key);
+    if (!(value > 0.0)) fail(*n, key, "must be positive, got " + format(value));
+    return value;
+  }
+  double inRange(std::string_view key, double fallback, double lo, double hi) {
+    const toml::node* n = get(key);
+    if (!n) return fallback;
+    const double value = asNumber(*n, key);
+    if (!(value >= lo && value <= hi)) fail(*n, key, "must be in [" + format(lo) + ", " + format(hi) + "], got " + format(value));
+    return value;
+  }
+  int integer(std::string_view key, int fallback, int lo, int hi) {
+    const toml::node* n = get(key);
+    if (!n) return fallback;
+    const auto* v = n->as_integer();
+    if (!v) fail(*n, key, "must be an integer");
+    if (v->get() < lo || v->get() > hi) {
+      fail(*n, key, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + std::to_string(v->get()));
+    }
+    return static_cast<int>(v->get());
+  }
+  bool boolean(std::string_view key, bool fallback) {
+    const toml::node* n = get(key);
+    if (!n) return fallback;
+    const auto* v = n->as_boolean();
+    if (!v) fail(*n, key, "must be true or false");
+    return v->get();
+  }
+  std::string string(std::string_view key, const std::string& fallback) {
+    const toml::node* n = get(key);
+    if (!n) return fallback;
+    const auto* v = n->as_string();
+    if (!v) fail(*n, key, "must be a string");
+    return v->get();
+  }
+  // One of a fixed set of words.
+  std::string choice(std::string_view key, const std::string& fallback, const std::vector<std::string>& options) {
+    const toml::node* n = get(key);
+    if (!n) return fallback;
+    const auto* v = n->as_string();
+    std::string all;
+    for (const std::string& o : options) all += (all.empty() ? "" : ", ") + o;
+    if (!v) fail(*n, key, "must be one of: " + all);
+    if (std::find(options.begin(), options.end(), v->get()) == options.end()) {
+      fail(*n, key, "'" + v->get() + "' is not one of: " + all);
+    }
+    return v->get();
+  }
+  Vec3 vec3(std::string_view key, const Vec3& fallback) {
+    const toml::node* n = get(key);
+    return n ? asVec3(*n, key) : fallback;
+  }
+  std::optional<Vec3> optionalVec3(std::string_view key) {
+    const toml::node* n = get(key);
+    return n ? std::optional<Vec3>(asVec3(*n, key)) : std::nullopt;
+  }
+  Vec3 color(std::string_view key, const Vec3& fallback) {
+    const toml::node* n = get(key);
+    if (!n) return fallback;
+    // A grey level or [r, g, b], each in [0, 1].
+    Vec3 c = n->is_number() ? Vec3{asNumber(*n, key), asNumber(*n, key), asNumber(*n, key)} : asVec3(*n, key);
+    for (int i = 0; i < 3; ++i) {
+      if (!(c[i] >= 0.0 && c[i] <= 1.0)) fail(*n, key, "colour components must be in [0, 1]");
+    }
+    return c;
+  }
+  const toml::table* subtable(std::string_view key) {
+    const toml::node* n = get(key);
+    if (!n) return nullptr;
+    if (!n->is_table()) fail(*n, key, "must be a table");
+    return n->as_table();
+  }
+
+  double asNumber(const toml::node& n, std::string_view key) const {
+    if (const auto* d = n.as_floating_point()) return finite(n, key, d->get());
+    if (const auto* i = n.as_integer()) return static_cast<double>(i->get());
+    fail(n, key, "must be a number");
+  }
+  Vec3 asVec3(const toml::node& n, std::string_view key) const {
+    const auto* a = n.as_array();
+    if (!a || a->size() != 3) fail(n, key, "must be an array of three numbers [x, y, z]");
+    return {asNumber(*a->get(0), key), asNumber(*a->get(1), key), asNumber(*a->get(2), key)};
+  }
+
+  // Rejects every key that was not read.
+  void finish() const {
+    for (auto&& [k, node] : table_) {
+      if (std::find(used_.begin(), used_.end(), k.str()) == used_.end()) {
+        throw Error(location(path_, k.source()) + ": unknown key '" + std::string(k.str()) + "' in " + section_ +
+                    " (see scenes/README.md for the keys)");
+      }
+    }
+  }
+
+  const std::string& path() const { return path_; }
+
+ private:
+  double finite(const toml::node& n, std::string_view key, double v) const {
+    if (!std::isfinite(v)) fail(n, key, "must be finite");
+    return v;
+  }
+  static std::string format(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+
+  const toml::table& table_;
+  const std::string& path_;
+  std::string section_;
+  std::vector<std::string> used_;
+};
+
+// Euler angles in degrees, applied as in the original Unity scenes: z, then x, then y.
+Vec3 rotate(const Vec3& p, const Vec3& degrees) {
+  const double rx = degrees.x * kPi / 180, ry = degrees.y * kPi / 180, rz = degrees.z * kPi / 180;
+  Vec3 q{p.x * std::cos(rz) - p.y * std::sin(rz), p.x * std::sin(rz) + p.y * std::cos(rz), p.z};
+  q = {q.x, q.y * std::cos(rx) - q.z * std::sin(rx), q.y * std::sin(rx) + q.z * std::cos(rx)};
+  return {q.x * std::cos(ry) + q.z * std::sin(ry), q.y, -q.x * std::sin(ry) + q.z * std::cos(ry)};
+}
+
+struct Transform {
+  Vec3 scale{1, 1, 1}, rotation, position;
+  Vec3 apply(const Vec3& p) const {
+    return rotate({p.x * scale.x, p.y * scale.y, p.z * scale.z}, rotation) + position;
+  }
+};
+
+Transform readTransform(Reader& r) {
+  Transform t;
+  if (const toml::node* n = r.get("scale")) {
+    if (n->is_number()) {
+      const double s = r.asNumber(*n, "scale");
+      t.scale = {s, s, s};
+    } else {
+      t.scale = r.asVec3(*n, "scale");
+    }
+    if (!(t.scale.x > 0 && t.scale.y > 0 && t.scale.z > 0)) r.fail(*n, "scale", "must be positive");
+  }
+  t.rotation = r.vec3("rotation", {});
+  t.position = r.vec3("position", {});
+  return t;
+}
+
+std::string resolvePath(const std::string& scenePath, const std::string& file) {
+  std::filesystem::path p(file);
+  if (p.is_absolute()) return file;
+  return (std::filesystem::path(scenePath).parent_path() / p).lexically_normal().string();
+}
+
+Material readMaterial(Reader& r, const Material& fallback) {
+  Material m = fallback;
+  m.color = r.color("color", fallback.color);
+  m.alpha = r.inRange("alpha", fallback.alpha, 0.0, 1.0);
+  m.shininess = r.positive("shininess", fallback.shininess);
+  return m;
+}
+
+ContactMaterial readContact(Reader& r) {
+  ContactMaterial c;
+  c.restitution = r.inRange("restitution", c.restitution, 0.0, 1.0);
+  c.friction = r.inRange("friction", c.friction, 0.0, 100.0);
+  return c;
+}
+
+const toml::array* arrayOfTables(const toml::table& root, std::string_view key, const std::string& path) {
+  const toml::node* n = root.get(key);
+  if (!n) return nullptr;
+  const auto* a = n->as_array();
+  if (!a || !a->is_array_of_tables()) {
+    throw Error(location(path, n->source()) + ": '" + std::string(key) + "' must be an array of tables ([[" +
+                std::string(key) + "]])");
+  }
+  return a;
+}
+
+// Pin rules a user can write without knowing vertex indices.
+uint32_t extremeVertex(const TriMesh& mesh, int axis, bool highest) {
+  uint32_t best = 0;
+  for (uint32_t i = 1; i < mesh.positions.size(); ++i) {
+    const double a = mesh.positions[i][axis], b = mesh.positions[best][axis];
+    if (highest ? a > b : a < b) best = i;
+  }
+  return best;
+}
+
+BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t index, Material& material) {
+  Reader r(table, path, "[[body]] #" + std::to_string(index + 1));
+  BodyDesc b;
+  b.name = r.string("name", "body " + std::to_string(index + 1));
+  const std::string shape =
+      r.choice("shape", "octahedron_sphere", {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mesh"});
+  // Shape parameters: each shape reads only its own keys; the others are then unknown keys.
+  TriMesh mesh;
+  try {
+    if (shape == "octahedron_sphere") {
+      mesh = makeOctahedronSphere(r.positive("radius", 1.0), r.integer("subdivisions", 6, 1, 256));
+    } else if (shape == "icosphere") {
+      mesh = makeIcosphere(r.positive("radius", 1.0), r.integer("subdivisions", 3, 0, 8));
+    } else if (shape == "cube") {
+      mesh = makeCube(r.positive("size", 1.0), r.integer("subdivisions", 1, 1, 256));
+    } else if (shape == "tetrahedron") {
+      mesh = makeTetrahedron(r.positive("size", 1.0));
+    } else if (shape == "jelly") {
+      mesh = makeJelly(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("ridges", 8, 0, 64),
+                       r.integer("rings", 10, 2, 200), r.integer("segments", 48, 3, 1000));
+    } else {
+      const toml::node* n = r.get("mesh");
+      if (!n || !n->is_string()) r.failHere("shape = \"mesh\" needs mesh = \"FILE\" (relative to the scene file)");
+      const std::string file = resolvePath(path, n->as_string()->get());
+      try {
+        mesh = loadClosedMesh(file);
+      } catch (const Error& e) {
+        r.fail(*n, "mesh", e.what());
+      }
+      if (const toml::node* s = r.get("simplify")) {
+        const auto* target = s->as_integer();
+        if (!target || target->get() < 4) r.fail(*s, "simplify", "must be a vertex count of at least 4");
+        mesh = simplifyMesh(mesh, static_cast<std::size_t>(target->get()));
+      }
+    }
+  } catch (const Error& e) {
+    if (std::string(e.what()).rfind(path, 0) == 0) throw;
+    r.failHere(e.what());
+  }
+  const Transform transform = readTransform(r);
+  for (Vec3& p : mesh.positions) p = transform.apply(p);
+  b.mesh = std::move(mesh);
+  b.velocity = r.vec3("velocity", {});
+  b.angularVelocity = r.vec3("angular_velocity", {});
+  b.model = r.choice("model", "springy", {"springy", "all_pairs"}) == "all_pairs" ? SpringModel::AllPairs
+                                                                               : SpringModel::Springy;
+  b.massDistribution = r.choice("mass_distribution", "area", {"area", "uniform"}) == "uniform"
+                           ? MassDistribution::Uniform
+                           : MassDistribution::AngleWeightedArea;
+  b.mass = r.positive("mass", b.mass);
+  b.strutDecay = r.positive("strut_decay", b.strutDecay);
+  b.strutPeriod = r.positive("strut_period", b.strutPeriod);
+  b.hingeDecay = r.number("hinge_decay", b.hingeDecay);
+  b.hingePeriod = r.number("hinge_period", b.hingePeriod);
+  b.strutStiffness = r.optionalNumber("strut_stiffness");
+  b.strutDamping = r.optionalNumber("strut_damping");
+  b.hingeStiffness = r.optionalNumber("hinge_stiffness");
+  b.hingeDamping = r.optionalNumber("hinge_damping");
+  for (auto* o : {&b.strutStiffness, &b.strutDamping, &b.hingeStiffness, &b.hingeDamping}) {
+    if (*o && !(**o >= 0.0)) r.failHere("spring constants must not be negative");
+  }
+  // Pins: vertex indices or rules ("top", "bottom", "left", "right", "front", "back": the
+  // extreme vertex along y, x or z), and pin_near = [[x, y, z], ...]: the nearest vertex.
+  if (const toml::node* n = r.get("pin")) {
+    const auto* a = n->as_array();
+    if (!a) r.fail(*n, "pin", "must be an array of vertex indices or rules, e.g. [\"top\"] or [0, 5]");
+    for (const toml::node& item : *a) {
+      if (const auto* i = item.as_integer()) {
+        if (i->get() < 0 || static_cast<std::size_t>(i->get()) >= b.mesh.positions.size()) {
+          r.fail(item, "pin", "vertex " + std::to_string(i->get()) + " does not exist (the body has " +
+                                  std::to_string(b.mesh.positions.size()) + " vertices)");
+        }
+        b.pinned.push_back(static_cast<uint32_t>(i->get()));
+      } else if (const auto* s = item.as_string()) {
+        static const std::vector<std::pair<std::string, std::pair<int, bool>>> rules = {
+            {"top", {1, true}},  {"bottom", {1, false}}, {"right", {0, true}},
+            {"left", {0, false}}, {"front", {2, false}}, {"back", {2, true}}};
+        auto it = std::find_if(rules.begin(), rules.end(), [&](auto& rule) { return rule.first == s->get(); });
+        if (it == rules.end()) r.fail(item, "pin", "unknown rule '" + s->get() + "' (top, bottom, left, right, front, back)");
+        b.pinned.push_back(extremeVertex(b.mesh, it->second.first, it->second.second));
+      } else {
+        r.fail(item, "pin", "entries must be vertex indices or rule names");
+      }
+    }
+  }
+  if (const toml::node* n = r.get("pin_near")) {
+    const auto* a = n->as_array();
+    if (!a) r.fail(*n, "pin_near", "must be an array of points [[x, y, z], ...]");
+    for (const toml::node& item : *a) {
+      const Vec3 p = r.asVec3(item, "pin_near");
+      uint32_t best = 0;
+      for (uint32_t i = 1; i < b.mesh.positions.size(); ++i) {
+        if (lengthSquared(b.mesh.positions[i] - p) < lengthSquared(b.mesh.positions[best] - p)) best = i;
+      }
+      b.pinned.push_back(best);
+    }
+  }
+  material = readMaterial(r, Material{{0.75, 0.2, 0.2}, 1.0, 48.0});
+  r.finish();
+  return b;
+}
+
+TriangleColliderDesc readTriangleCollider(const toml::table& table, const std::string& path, std::size_t index) {
+  Reader r(table, path, "[[triangles]] #" + std::to_string(index + 1));
+  TriangleColliderDesc d;
+  TriangleCollider& c = d.collider;
+  c.name = r.string("name", "triangles " + std::to_string(index + 1));
+  TriMesh& m = c.mesh;
+  if (const toml::node* n = r.get("mesh")) {
+    if (!n->is_string()) r.fail(*n, "mesh", "must be a file name");
+    try {
+      m = weldVertices(readMeshFile(resolvePath(path, n->as_string()->get())), 0.0);
+    } catch (const Error& e) {
+      r.fail(*n, "mesh", e.what());
+    }
+  }
+  if (const toml::node* n = r.get("vertices")) {
+    const auto* a = n->as_array();
+    if (!a) r.fail(*n, "vertices", "must be an array of points");
+    for (const toml::node& item : *a) m.positions.push_back(r.asVec3(item, "vertices"));
+    const toml::node* tn = r.get("indices");
+    if (!tn || !tn->as_array()) r.fail(*n, "vertices", "needs indices = [[i, j, k], ...]");
+    for (const toml::node& item : *tn->as_array()) {
+      const Vec3 t = r.asVec3(item, "indices");
+      Triangle tri{};
+      for (int k = 0; k < 3; ++k) {
+        if (t[k] < 0 || t[k] >= static_cast<double>(m.positions.size()) || t[k] != std::floor(t[k])) {
+          r.fail(item, "indices", "must be indices of vertices");
+        }
+        tri[static_cast<std::size_t>(k)] = static_cast<uint32_t>(t[k]);
+      }
+      m.triangles.push_back(tri);
+    }
+  }
+  // quads = [[a, b, c, d], ...]: each a flat quadrilateral plate of four corners.
+  if (const toml::node* n = r.get("quads")) {
+    const auto* a = n->as_array();
+    if (!a) r.fail(*n, "quads", "must be an array of quads, each [[x,y,z] x 4]");
+    for (const toml::node& item : *a) {
+      const auto* q = item.as_array();
+      if (!q || q->size() != 4) r.fail(item, "quads", "each quad needs four corners");
+      const uint32_t base = static_cast<uint32_t>(m.positions.size());
+      for (const toml::node& corner : *q) m.positions.push_back(r.asVec3(corner, "quads"));
+      m.triangles.push_back({base, base + 1, base + 2});
+      m.triangles.push_back({base, base + 2, base + 3});
+    }
+  }
+  if (m.triangles.empty()) r.failHere("needs triangles: mesh = \"FILE\", vertices + indices, or quads");
+  const Transform transform = readTransform(r);
+  for (Vec3& p : m.positions) p = transform.apply(p);
+  c.material = readContact(r);
+  d.material = readMaterial(r, Material{{0.55, 0.5, 0.45}, 1.0, 16.0});
+  d.visible = r.boolean("visible", true);
+  r.finish();
+  return d;
+}
+
+}  // namespace
+
+SceneDesc parseScene(const std::string& text, const std::string& path) {
+  toml::table root;
+  try {
+    root = toml::parse(text, path);
+  } catch (const toml::parse_error& e) {
+    throw Error(location(path, e.source()) + ": " + std::string(e.description()));
+  }
+  SceneDesc scene;
+  scene.path = path;
+  Reader top(root, path, "the scene");
+  scene.name = std::filesystem::path(path).stem().string();
+
+  if (const toml::table* t = top.subtable("scene")) {
+    Reader r(*t, path, "[scene]");
+    scene.name = r.string("name", scene.name);
+    scene.duration = r.positive("duration", scene.duration);
+    scene.dt = r.positive("dt", scene.dt);
+    scene.substeps = r.integer("substeps", 1, 1, 100000);
+    if (const toml::node* n = r.get("integrator")) {
+      if (!n->is_string() || !parseIntegrator(n->as_string()->get(), scene.integrator)) {
+        r.fail(*n, "integrator", "must be one of: " + integratorNames());
+      }
+    }
+    scene.restingSpeed = r.number("resting_speed", scene.restingSpeed);
+    r.finish();
+  }
+  if (const toml::table* t = top.subtable("environment")) {
+    Reader r(*t, path, "[environment]");
+    scene.gravity = r.vec3("gravity", scene.gravity);
+    scene.drag = r.inRange("drag", 0.0, 0.0, 1e6);
+    if (const toml::table* w = r.subtable("wind")) {
+      Reader wr(*w, path, "[environment.wind]");
+      Wind wind;
+      wind.velocity = wr.vec3("velocity", {});
+      wind.gustStrength = wr.inRange("gust_strength", 0.0, 0.0, 10.0);
+      wind.gustPeriod = wr.positive("gust_period", 2.0);
+      wind.pressure = wr.inRange("pressure", 0.0, 0.0, 1e6);
+      wind.seed = static_cast<uint64_t>(wr.integer("seed", 1, 0, 2147483647));
+      wr.finish();
+      scene.wind = wind;
+    }
+    r.finish();
+  }
+  if (const toml::array* bodies = arrayOfTables(root, "body", path)) {
+    top.get("body");
+    for (std::size_t i = 0; i < bodies->size(); ++i) {
+      Material material;
+      scene.bodies.push_back(readBody(*bodies->get(i)->as_table(), path, i, material));
+      scene.bodyMaterials.push_back(material);
+    }
+  }
+  if (const toml::array* planes = arrayOfTables(root, "plane", path)) {
+    top.get("plane");
+    for (std::size_t i = 0; i < planes->size(); ++i) {
+      Reader r(*planes->get(i)->as_table(), path, "[[plane]] #" + std::to_string(i + 1));
+      PlaneDesc p;
+      p.collider.point = r.vec3("point", {});
+      const toml::node* nn = r.get("normal");
+      const Vec3 normal = nn ? r.asVec3(*nn, "normal") : Vec3{0, 1, 0};
+      if (!(length(normal) > 0.0)) r.fail(*nn, "normal", "must not be zero");
+      p.collider.normal = normalized(normal);
+      p.collider.material = readContact(r);
+      p.material = readMaterial(r, Material{{0.575, 0.54, 0.54}, 1.0, 8.0});
+      p.visible = r.boolean("visible", true);
+      p.extent = r.positive("extent", p.extent);
+      r.finish();
+      scene.planes.push_back(p);
+    }
+  }
+  if (const toml::array* tris = arrayOfTables(root, "triangles", path)) {
+    top.get("triangles");
+    for (std::size_t i = 0; i < tris->size(); ++i) {
+      scene.triangleColliders.push_back(readTriangleCollider(*tris->get(i)->as_table(), path, i));
+    }
+  }
+  if (const toml::array* props = arrayOfTables(root, "prop", path)) {
+    top.get("prop");
+    for (std::size_t i = 0; i < props->size(); ++i) {
+      Reader r(*props->get(i)->as_table(), path, "[[prop]] #" + std::to_string(i + 1));
+      PropDesc p;
+      if (r.choice("shape", "cylinder", {"cylinder", "box"}) == "box") {
+        p.shape = PropDesc::Shape::Box;
+        p.center = r.vec3("center", {});
+        p.size = r.vec3("size", {1, 1, 1});
+      } else {
+        p.from = r.vec3("from", {});
+        p.to = r.vec3("to", {0, 1, 0});
+        p.radius = r.positive("radius", p.radius);
+      }
+      p.material = readMaterial(r, Material{{0.45, 0.3, 0.2}, 1.0, 16.0});
+      r.finish();
+      scene.props.push_back(p);
+    }
+  }
+  if (const toml::table* t = top.subtable("render")) {
+    Reader r(*t, path, "[render]");
+    RenderDesc& rd = scene.render;
+    rd.width = r.integer("width", rd.width, 16, 7680);
+    rd.height = r.integer("height", rd.height, 16, 4320);
+    if (rd.width % 2 || rd.height % 2) r.failHere("width and height must be even (the video is yuv420p)");
+    rd.fps = r.inRange("fps", rd.fps, 1.0, 240.0);
+    rd.crf = r.integer("crf", rd.crf, 0, 51);
+    rd.preset = r.choice("preset", rd.preset,
+                         {"ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow"});
+    rd.shadows = r.boolean("shadows", rd.shadows);
+    rd.antialias = r.boolean("antialias", rd.antialias);
+    rd.overlay = r.boolean("overlay", rd.overlay);
+    rd.shadowMapSize = r.integer("shadow_map_size", rd.shadowMapSize, 256, 8192);
+    rd.skyTop = r.color("sky_top", rd.skyTop);
+    rd.skyBottom = r.color("sky_bottom", rd.skyBottom);
+    if (const toml::table* c = r.subtable("camera")) {
+      Reader cr(*c, path, "[render.camera]");
+      rd.camera.position = cr.optionalVec3("position");
+      rd.camera.target = cr.optionalVec3("target");
+      rd.camera.angles = cr.optionalVec3("angles");
+      if (rd.camera.target && rd.camera.angles) cr.failHere("give either target or angles, not both");
+      rd.camera.fov = cr.inRange("fov", rd.camera.fov, 1.0, 170.0);
+      cr.finish();
+    }
+    if (const toml::table* l = r.subtable("light")) {
+      Reader lr(*l, path, "[render.light]");
+      rd.light.angles = lr.vec3("angles", rd.light.angles);
+      rd.light.color = lr.color("color", rd.light.color);
+      rd.light.ambient = lr.inRange("ambient", rd.light.ambient, 0.0, 1.0);
+      lr.finish();
+    }
+    r.finish();
+  }
+  top.finish();
+  if (scene.bodies.empty()) throw Error(path + ": the scene has no [[body]]");
+  return scene;
+}
+
+SceneDesc loadScene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open the scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseScene(text.str(), path);
+}
+
+Model buildModel(const SceneDesc& scene) {
+  Model model;
+  model.gravity = scene.gravity;
+  model.drag = scene.drag;
+  if (scene.wind) {
+    Wind w = *scene.wind;
+    // Gust phases and frequency spread from a splitmix64 sequence of the seed: the same seed
+    // gives the same gusts on every platform (no std:: distribution involved).
+    uint64_t state = w.seed;
+    auto next = [&state] {
+      uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+      z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+      return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+    };
+    for (int i = 0; i < 4; ++i) {
+      w.phase[i] = 2 * kPi * next();
+      w.frequency[i] = (0.5 + next()) / w.gustPeriod * (1.0 + 0.37 * i);
+    }
+    model.wind = w;
+  }
+  for (const BodyDesc& b : scene.bodies) {
+    try {
+      addBody(model, b);
+    } catch (const Error& e) {
+      throw Error(scene.path + ": " + e.what());
+    }
+  }
+  for (const PlaneDesc& p : scene.planes) model.colliders.planes.push_back(p.collider);
+  for (const TriangleColliderDesc& t : scene.triangleColliders) model.colliders.meshes.push_back(t.collider);
+  // Impacts slower than a few steps' worth of gravity are resting contact, not bounces: a
+  // vertex on the ground gains |g| dt of speed per step and must not be launched back up.
+  const double dt = stepSize(scene);
+  model.colliders.restingSpeed = scene.restingSpeed >= 0.0 ? scene.restingSpeed : 4.0 * length(scene.gravity) * dt;
+  return model;
+}
+
+}  // namespace springy

@@ -1,0 +1,107 @@
+// springy: scene files.
+//
+// A scene is a TOML file (human-editable, with comments): simulation settings, environment,
+// bodies, colliders, props and render settings. Loading produces plain data (SceneDesc);
+// buildModel turns it into the simulation's Model. Every error names the file, line and key;
+// an unknown key is an error, so a typo never passes silently as a default. The keys and their
+// defaults are documented in scenes/README.md.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sim/model.h"
+#include "sim/world.h"
+
+namespace springy {
+
+struct Material {
+  Vec3 color{0.8, 0.8, 0.8};  // linear RGB in [0, 1]
+  double alpha = 1.0;          // 1 opaque, < 1 translucent
+  double shininess = 32.0;     // Phong exponent
+};
+
+struct CameraDesc {
+  std::optional<Vec3> position;   // [m]
+  std::optional<Vec3> target;     // looked-at point
+  std::optional<Vec3> angles;     // Euler angles [deg] (pitch down, yaw, roll) instead of target
+  double fov = 60.0;              // vertical field of view [deg]
+};
+
+struct LightDesc {
+  Vec3 angles{50.0, -30.0, 0.0};   // Euler angles [deg] of a directional light (pitch, yaw, roll)
+  Vec3 color{1.0, 0.957, 0.839};
+  double ambient = 0.3;
+};
+
+struct RenderDesc {
+  int width = 1280, height = 720;
+  double fps = 30.0;
+  int crf = 20;                    // H.264 quality, lower = better
+  std::string preset = "veryfast"; // x264 preset
+  bool shadows = true;
+  bool antialias = true;
+  bool overlay = true;
+  int shadowMapSize = 2048;
+  Vec3 skyTop{0.36, 0.56, 0.82}, skyBottom{0.85, 0.9, 0.95};
+  CameraDesc camera;
+  LightDesc light;
+};
+
+// Render-only geometry (the gallows), not a collider.
+struct PropDesc {
+  enum class Shape { Cylinder, Box } shape = Shape::Cylinder;
+  Vec3 from, to;       // cylinder axis end points
+  double radius = 0.5; // cylinder radius
+  Vec3 center, size;   // box
+  Material material;
+};
+
+struct PlaneDesc {
+  PlaneCollider collider;
+  Material material;
+  bool visible = true;
+  double extent = 200.0;  // half-size of the drawn floor [m]
+};
+
+struct TriangleColliderDesc {
+  TriangleCollider collider;  // mesh in world coordinates
+  Material material;
+  bool visible = true;
+};
+
+struct SceneDesc {
+  std::string path;   // the file it came from
+  std::string name;
+  // Simulation.
+  double duration = 10.0;  // [s]
+  double dt = 0.002;       // [s]
+  int substeps = 1;        // steps of dt / substeps per dt
+  Integrator integrator = Integrator::RK4;
+  double restingSpeed = -1.0;  // < 0: automatic (see buildModel)
+  // Environment.
+  Vec3 gravity{0.0, -9.81, 0.0};
+  double drag = 0.0;
+  std::optional<Wind> wind;
+  // Contents.
+  std::vector<BodyDesc> bodies;
+  std::vector<Material> bodyMaterials;  // parallel to bodies
+  std::vector<PlaneDesc> planes;
+  std::vector<TriangleColliderDesc> triangleColliders;
+  std::vector<PropDesc> props;
+  RenderDesc render;
+};
+
+// Reads and validates a scene file. Throws springy::Error "FILE:LINE:COLUMN: message".
+SceneDesc loadScene(const std::string& path);
+// The same from text in memory (`path` is used in messages and to resolve mesh paths).
+SceneDesc parseScene(const std::string& text, const std::string& path);
+
+// The model a scene describes.
+Model buildModel(const SceneDesc& scene);
+
+// The step the world takes: dt / substeps.
+inline double stepSize(const SceneDesc& scene) { return scene.dt / scene.substeps; }
+
+}  // namespace springy

@@ -1,0 +1,21 @@
+// springy: damped springs along struts (seed eq. 1-4).
+//
+//   x_ij = x_j - x_i, l = |x_ij|, u = x_ij / l
+//   f_i = k (l - l0) u + d ((v_j - v_i) . u) u,   f_j = -f_i
+//
+// The dashpot acts only along the strut, so a rigid rotation of the strut feels no damping.
+#pragma once
+
+#include <cstddef>
+
+#include "sim/model.h"
+
+namespace springy {
+
+// Accumulates the forces of struts [begin, end) into f.
+void applyStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f);
+
+// Elastic energy 1/2 k (l - l0)^2 summed over struts [begin, end).
+double strutEnergy(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x);
+
+}  // namespace springy

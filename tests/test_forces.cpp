@@ -1,0 +1,182 @@
+// Struts and hinges: the laws the forces must obey.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "fixtures.h"
+#include "sim/hinge.h"
+#include "sim/shapes.h"
+#include "sim/strut.h"
+
+namespace springy {
+namespace {
+
+// Measures period (mean time between upward zero crossings of the extension) and the decay
+// time constant (from the log of successive peak amplitudes) of a strut's oscillation.
+struct Oscillation {
+  double period, decay;
+};
+Oscillation measureStrut(World& world, double restLength, double seconds) {
+  std::vector<double> crossings, peakTimes, peaks;
+  double prev = length(world.positions()[1] - world.positions()[0]) - restLength, prevPrev = prev;
+  while (world.time() < seconds) {
+    world.step();
+    const double ext = length(world.positions()[1] - world.positions()[0]) - restLength;
+    if (prev < 0.0 && ext >= 0.0) crossings.push_back(world.time() - world.dt() * ext / (ext - prev));
+    if (prev > prevPrev && prev >= ext && prev > 0.0) {
+      // Parabolic interpolation of the peak through the last three samples.
+      const double denom = prevPrev - 2 * prev + ext;
+      const double off = denom != 0.0 ? 0.5 * (prevPrev - ext) / denom : 0.0;
+      peaks.push_back(prev - 0.25 * (prevPrev - ext) * off);
+      peakTimes.push_back(world.time() - world.dt() * (1.0 - off));
+    }
+    prevPrev = prev;
+    prev = ext;
+  }
+  Oscillation o{};
+  o.period = (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
+  // ln(A) falls linearly with slope -1/T.
+  o.decay = (peakTimes.back() - peakTimes.front()) / std::log(peaks.front() / peaks.back());
+  return o;
+}
+
+TEST(Strut, OneFreeMassOscillatesWithPeriodPAndDecayT) {
+  // The seed's conversion (eq. 22-25) is for a mass m on the spring against a fixed end.
+  const double m = 0.5, P = 0.2, T = 0.5, L = 1.0;
+  Model model = test::strutModel(m, m, L, stiffnessFromPeriod(m, P), dampingFromDecay(m, T), /*pinFirst=*/true);
+  World world(std::move(model), Integrator::RK4, 1e-4);
+  std::vector<Vec3> x = world.positions();
+  x[1].x += 0.05;
+  world.setState(x, world.velocities());
+  const Oscillation o = measureStrut(world, L, 1.5);
+  // The damped period is P / sqrt(1 - (P / (2 pi T))^2); T is exact.
+  const double dampedPeriod = P / std::sqrt(1.0 - std::pow(P / (2 * kPi * T), 2));
+  EXPECT_NEAR(o.period, dampedPeriod, 0.01 * P);
+  EXPECT_NEAR(o.period, P, 0.01 * P);
+  EXPECT_NEAR(o.decay, T, 0.01 * T);
+}
+
+TEST(Strut, TwoFreeMassesOscillateAboutTheirCentreWithTheReducedMass) {
+  // Two free masses m on the same spring: the reduced mass m/2 gives period P / sqrt(2) and
+  // decay time T / 2. This is why P and T are documented as "against a fixed end".
+  const double m = 0.5, P = 0.2, T = 0.5, L = 1.0;
+  Model model = test::strutModel(m, m, L, stiffnessFromPeriod(m, P), dampingFromDecay(m, T), false);
+  World world(std::move(model), Integrator::RK4, 1e-4);
+  std::vector<Vec3> x = world.positions();
+  x[0].x -= 0.025;
+  x[1].x += 0.025;
+  world.setState(x, world.velocities());
+  const Oscillation o = measureStrut(world, L, 0.8);
+  EXPECT_NEAR(o.period, P / std::sqrt(2.0), 0.01 * P / std::sqrt(2.0));
+  EXPECT_NEAR(o.decay, T / 2, 0.01 * T / 2);
+}
+
+TEST(Strut, ForcesFollowHookeAndDashpotLaws) {
+  const Strut s{0, 1, 2.0, 10.0, 3.0};
+  const Vec3 x[2] = {{0, 0, 0}, {0, 2.5, 0}};
+  const Vec3 v[2] = {{0, 0, 0}, {1.0, 0.2, 0}};  // only the 0.2 along the strut is damped
+  Vec3 f[2] = {};
+  applyStruts(&s, 0, 1, x, v, f);
+  EXPECT_DOUBLE_EQ(f[0].y, 10.0 * 0.5 + 3.0 * 0.2);
+  EXPECT_DOUBLE_EQ(f[1].y, -f[0].y);
+  EXPECT_DOUBLE_EQ(f[0].x, 0.0);
+}
+
+class HingeAngles : public ::testing::TestWithParam<double> {};
+
+TEST_P(HingeAngles, ForcesSumToZeroWithZeroTorque) {
+  const double theta = GetParam();
+  Model model = test::hingeModel(0.3, 2.0, 0.7, false);
+  std::vector<Vec3> x = test::hingePositions(theta);
+  x[3] += Vec3{0.1, 0.05, -0.2};  // asymmetric
+  const std::vector<Vec3> v = {{0.3, -0.2, 0.1}, {-0.5, 0.4, 0.2}, {0.1, 0.9, -1.0}, {0.7, -0.3, 0.4}};
+  std::vector<Vec3> f(4);
+  applyHinges(model.hinges.data(), 0, 1, x.data(), v.data(), f.data());
+  Vec3 sum, torque;
+  double scale = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    sum += f[i];
+    torque += cross(x[i] - Vec3{3, -2, 5}, f[i]);  // about an arbitrary point
+    scale += length(f[i]);
+  }
+  ASSERT_GT(scale, 0.1);
+  EXPECT_LT(length(sum), 1e-12 * scale);
+  EXPECT_LT(length(torque), 1e-11 * scale);
+}
+
+TEST_P(HingeAngles, ElasticForceIsMinusTheEnergyGradient) {
+  // With d_theta = 0, f = -grad(1/2 k (theta - theta0)^2): compare with central differences.
+  const double theta = GetParam();
+  Model model = test::hingeModel(0.3, 2.0, 0.0, false);
+  std::vector<Vec3> x = test::hingePositions(theta);
+  x[2] += Vec3{0.05, -0.1, 0.02};
+  std::vector<Vec3> v(4), f(4);
+  applyHinges(model.hinges.data(), 0, 1, x.data(), v.data(), f.data());
+  const double h = 1e-6;
+  for (int i = 0; i < 4; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      std::vector<Vec3> xp = x, xm = x;
+      xp[i][c] += h;
+      xm[i][c] -= h;
+      const double grad = (hingeEnergy(model.hinges.data(), 0, 1, xp.data()) -
+                           hingeEnergy(model.hinges.data(), 0, 1, xm.data())) / (2 * h);
+      EXPECT_NEAR(f[i][c], -grad, 1e-6) << "vertex " << i << " component " << c;
+    }
+  }
+}
+
+TEST_P(HingeAngles, RestAngleMatchesTheForceConvention) {
+  // A hinge built at its rest configuration exerts no force (the seed's rest angle was
+  // mirrored, so every hinge started pre-stressed).
+  const double theta = GetParam();
+  Model model = test::hingeModel(theta, 5.0, 1.0, false);
+  EXPECT_NEAR(dihedralAngle(model.restPosition[0], model.restPosition[1], model.restPosition[2], model.restPosition[3]),
+              theta, 1e-12);
+  std::vector<Vec3> v(4), f(4);
+  applyHinges(model.hinges.data(), 0, 1, model.restPosition.data(), v.data(), f.data());
+  for (const Vec3& fi : f) EXPECT_LT(length(fi), 1e-12);
+}
+
+INSTANTIATE_TEST_SUITE_P(Angles, HingeAngles, ::testing::Values(-2.5, -1.0, -0.2, 0.0, 0.4, 1.2, 2.8));
+
+TEST(Hinge, ConvexFoldHasPositiveAngleAndWrapsAtPi) {
+  EXPECT_GT(dihedralAngle({0, 0, 0}, {1, 0, 0}, {0.4, 1, -0.3}, {0.6, -1, -0.3}), 0.0);
+  EXPECT_NEAR(angleDifference(3.1, -3.1), 6.2 - 2 * kPi, 1e-12);
+  EXPECT_NEAR(angleDifference(-3.1, 3.1), 2 * kPi - 6.2, 1e-12);
+}
+
+TEST(Hinge, BentHingeReturnsToRestAngle) {
+  const double rest = 0.5;
+  Model model = test::hingeModel(rest, 0.5, 0.8, true, 200.0, 2.0);
+  World world(std::move(model), Integrator::RK4, 1e-3);
+  world.setState(test::hingePositions(1.3), std::vector<Vec3>(4));
+  for (int s = 0; s < 20000; ++s) world.step();
+  const auto& x = world.positions();
+  EXPECT_NEAR(dihedralAngle(x[0], x[1], x[2], x[3]), rest, 1e-3);
+}
+
+TEST(Hinge, RigidMotionGivesNoForceEvenWithDamping) {
+  // A bent body moving rigidly (translation + rotation) feels no strut or hinge force.
+  TriMesh mesh = makeIcosphere(1.0, 1);
+  for (Vec3& p : mesh.positions) p.y *= 0.6;  // not a sphere: hinges at several angles
+  Model model;
+  model.gravity = {};
+  BodyDesc desc;
+  desc.name = "rigid";
+  desc.mesh = mesh;
+  desc.mass = 2.0;
+  addBody(model, desc);
+  ASSERT_FALSE(model.hinges.empty());
+  World world(std::move(model), Integrator::RK4, 1e-3);
+  const Vec3 velocity{1.0, -2.0, 0.5}, omega{0.3, 1.1, -0.7}, c{0.2, 0.1, -0.3};
+  std::vector<Vec3> v(world.positions().size());
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = velocity + cross(omega, world.positions()[i] - c);
+  std::vector<Vec3> f(v.size());
+  world.computeForces(world.positions().data(), v.data(), 0.0, f.data());
+  double biggestSpringForce = 0.0;
+  for (const Strut& s : world.model().struts) biggestSpringForce = std::max(biggestSpringForce, s.damping * length(velocity));
+  for (const Vec3& fi : f) EXPECT_LT(length(fi), 1e-9 * biggestSpringForce);
+}
+
+}  // namespace
+}  // namespace springy

@@ -149,13 +149,18 @@ void World::step() {
       cachedAccelerationValid_ = true;
       break;
     case Integrator::Leapfrog:
+      // Forces at both ends of the step. The closing kick needs a(t + dt) at the velocity
+      // v(t + dt), which it is about to compute; the half-step velocity plus the first half
+      // kick once more predicts it to O(dt^2), which keeps the scheme second order when the
+      // forces depend on velocity (dampers, drag). With position-only forces it is exact KDK.
       accelerations(x_.data(), v_.data(), t, a_.data());
       for (std::size_t i = 0; i < n; ++i) {
-        vs_[i] = v_[i] + a_[i] * (0.5 * dt);  // kick
-        x_[i] += vs_[i] * dt;                 // drift
+        v_[i] += a_[i] * (0.5 * dt);           // kick
+        x_[i] += v_[i] * dt;                   // drift
+        vs_[i] = v_[i] + a_[i] * (0.5 * dt);   // predicted v(t + dt)
       }
       accelerations(x_.data(), vs_.data(), t + dt, a_.data());
-      for (std::size_t i = 0; i < n; ++i) v_[i] = vs_[i] + a_[i] * (0.5 * dt);  // kick
+      for (std::size_t i = 0; i < n; ++i) v_[i] += a_[i] * (0.5 * dt);  // kick
       break;
     case Integrator::RK4: {
       // k1 = f(y), k2 = f(y + dt/2 k1), k3 = f(y + dt/2 k2), k4 = f(y + dt k3); the position

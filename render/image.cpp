@@ -1,0 +1,91 @@
+#include "render/image.hpp"
+
+#include <stb/stb_image.h>
+#include <stb/stb_image_write.h>
+
+#include <algorithm>
+#include <cstring>
+#include <memory>
+
+#include "render/error.hpp"
+
+namespace springy::render {
+
+void writePng(const std::string& path, int width, int height, std::span<const std::uint8_t> rgba) {
+  if (width <= 0 || height <= 0 ||
+      rgba.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 4)
+    throw RenderError("writePng '" + path + "': size " + std::to_string(rgba.size()) +
+                      " bytes does not match " + std::to_string(width) + "x" +
+                      std::to_string(height) + " RGBA");
+  // stb's flip flag is global state; rows are already top-down, so keep it off.
+  stbi_flip_vertically_on_write(0);
+  if (!stbi_write_png(path.c_str(), width, height, 4, rgba.data(), width * 4))
+    throw RenderError("writePng: cannot write '" + path + "'");
+}
+
+Image readPng(const std::string& path) {
+  int w = 0, h = 0, channels = 0;
+  std::unique_ptr<stbi_uc, void (*)(void*)> data(stbi_load(path.c_str(), &w, &h, &channels, 4),
+                                                 stbi_image_free);
+  if (!data)
+    throw RenderError("readPng: cannot read '" + path + "': " + stbi_failure_reason());
+  Image img;
+  img.width = w;
+  img.height = h;
+  img.rgba.assign(data.get(), data.get() + static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
+  return img;
+}
+
+Image makeContactSheet(const std::vector<Image>& images, const std::vector<std::string>& labels,
+                       const ContactSheetOptions& o) {
+  if (images.empty()) throw RenderError("makeContactSheet: no images");
+  if (!labels.empty() && labels.size() != images.size())
+    throw RenderError("makeContactSheet: " + std::to_string(labels.size()) + " labels for " +
+                      std::to_string(images.size()) + " images");
+  int cellW = 0, cellH = 0;
+  for (const Image& im : images) {
+    cellW = std::max(cellW, im.width);
+    cellH = std::max(cellH, im.height);
+  }
+  std::unique_ptr<Font> font;
+  int labelH = 0;
+  if (!labels.empty()) {
+    font = std::make_unique<Font>(o.fontPath, o.labelPixelHeight);
+    labelH = font->lineHeight() + 4;
+    for (const std::string& l : labels) cellW = std::max(cellW, font->textWidth(l) + 4);
+  }
+  const int n = static_cast<int>(images.size());
+  const int cols = std::clamp(o.columns, 1, n);
+  const int rows = (n + cols - 1) / cols;
+  Image sheet;
+  sheet.width = o.padding + cols * (cellW + o.padding);
+  sheet.height = o.padding + rows * (cellH + labelH + o.padding);
+  sheet.rgba.resize(static_cast<std::size_t>(sheet.width) * static_cast<std::size_t>(sheet.height) * 4);
+  for (std::size_t i = 0; i < sheet.rgba.size(); i += 4) {
+    sheet.rgba[i] = o.background[0];
+    sheet.rgba[i + 1] = o.background[1];
+    sheet.rgba[i + 2] = o.background[2];
+    sheet.rgba[i + 3] = 255;
+  }
+  for (int i = 0; i < n; ++i) {
+    const Image& im = images[static_cast<std::size_t>(i)];
+    if (im.rgba.size() != static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * 4)
+      throw RenderError("makeContactSheet: image " + std::to_string(i) + " has a bad pixel buffer");
+    const int cx = o.padding + (i % cols) * (cellW + o.padding);
+    const int cy = o.padding + (i / cols) * (cellH + labelH + o.padding);
+    const int ox = cx + (cellW - im.width) / 2, oy = cy + (cellH - im.height) / 2;
+    for (int y = 0; y < im.height; ++y)
+      std::memcpy(sheet.rgba.data() + (static_cast<std::size_t>(oy + y) * static_cast<std::size_t>(sheet.width) +
+                                       static_cast<std::size_t>(ox)) * 4,
+                  im.rgba.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(im.width) * 4,
+                  static_cast<std::size_t>(im.width) * 4);
+    if (font) {
+      const std::string& label = labels[static_cast<std::size_t>(i)];
+      const int tx = cx + (cellW - font->textWidth(label)) / 2;
+      font->draw(sheet, tx, cy + cellH + 2, label, glm::vec3(0.92f));
+    }
+  }
+  return sheet;
+}
+
+}  // namespace springy::render

@@ -1,0 +1,36 @@
+// Why: still frames and contact sheets are written as PNG (stb_image_write) and read back in
+// tests (stb_image). All images are RGBA8 with rows TOP-DOWN, as Renderer::readPixels returns.
+#pragma once
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "render/text.hpp"
+
+namespace springy::render {
+
+// Writes an RGBA8 top-down image (rgba.size() == width*height*4). Throws RenderError naming the
+// path on failure. Writes exactly `path` (no temp file).
+void writePng(const std::string& path, int width, int height, std::span<const std::uint8_t> rgba);
+inline void writePng(const std::string& path, const Image& image) {
+  writePng(path, image.width, image.height, image.rgba);
+}
+// Reads any PNG as RGBA8 top-down. Throws RenderError naming the path on failure.
+Image readPng(const std::string& path);
+
+struct ContactSheetOptions {
+  int columns = 4;              // images per row (rows follow from the image count)
+  int padding = 8;              // pixels between cells and around the sheet
+  float labelPixelHeight = 18;  // label font size; label strip is drawn under each image
+  std::uint8_t background[3] = {24, 24, 28};
+  std::string fontPath = kDefaultFontPath;
+};
+
+// Composes images into a grid, each cell labelled underneath (e.g. "t = 1.50 s"). Images may
+// differ in size; cells take the largest size
+// (widened to fit the widest label). labels.size() must be 0 or images.size().
+Image makeContactSheet(const std::vector<Image>& images, const std::vector<std::string>& labels,
+                       const ContactSheetOptions& options = {});
+
+}  // namespace springy::render

@@ -1,0 +1,124 @@
+// Why: the app turns simulation state into plain draw data (positions, triangles, colours) and
+// asks for frames; Renderer owns all GL state for that: an offscreen GlContext, meshes, a
+// camera, one shadow-casting directional light, a sky gradient, a checker ground, translucency
+// and an overlay text block. It knows nothing about the simulation.
+//
+// Threading: a Renderer and its GL context belong to the thread that created it.
+// Colours are display (sRGB-like) values in 0..1; lighting is done in linear space.
+#pragma once
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "render/camera.hpp"
+#include "render/mesh_builders.hpp"
+#include "render/text.hpp"
+
+namespace springy::render {
+
+struct Material {
+  glm::vec3 colour{0.8f, 0.3f, 0.2f};  // display colour, 0..1
+  // < 1: translucent (e.g. jelly 0.7): drawn after opaque meshes, back to front, without depth
+  // writes; a closed body's far and near sides together block `alpha` of what is behind.
+  float alpha = 1.0f;
+  float shininess = 32.0f;   // Blinn-Phong exponent
+  float specular = 0.25f;    // highlight strength, 0 = matte
+};
+
+// One directional light. direction: the way the light travels (e.g. (0,-1,0) = straight down).
+struct Light {
+  glm::vec3 direction{-0.35f, -1.0f, -0.45f};
+  glm::vec3 colour{0.9f, 0.88f, 0.82f};  // linear intensity of the direct light
+  glm::vec3 ambient{0.28f, 0.30f, 0.34f};  // linear ambient (hemispherical: less from below)
+};
+
+struct RenderSettings {
+  int width = 1280;           // frame size; must be even for H.264 video
+  int height = 720;
+  bool antiAlias = true;      // 4x MSAA
+  bool shadows = true;        // false: no shadow pass at all
+  int shadowMapSize = 2048;   // square depth texture, texels
+  float shadowSoftness = 1.0f;  // PCF tap spacing in shadow-map texels
+  std::string fontPath = kDefaultFontPath;  // overlay font (loaded only if overlay text is set)
+  float overlayPixelHeight = 0.0f;  // 0: height / 36, at least 12 px
+};
+
+struct RenderTimings {
+  double renderMs = 0.0;    // last render() (GL work finished: glFinish included)
+  double readbackMs = 0.0;  // last readPixels() (MSAA resolve + glReadPixels + row flip)
+  double totalRenderMs = 0.0;
+  double totalReadbackMs = 0.0;
+  std::uint64_t frames = 0;
+  std::uint64_t readbacks = 0;
+};
+
+using MeshId = std::uint32_t;
+
+class Renderer {
+public:
+  // Creates the GL context and GL resources. Throws RenderError.
+  explicit Renderer(const RenderSettings& settings = {});
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  const RenderSettings& settings() const;
+  int width() const;
+  int height() const;
+  float aspect() const;
+
+  // --- Meshes. Triangle indices: 3 per triangle, each < vertex count. Throws RenderError on
+  // bad sizes or indices. Normals are smooth, area-weighted, recomputed by the renderer.
+  // A soft body: topology and material once; positions each frame with updateDynamicMesh.
+  MeshId addDynamicMesh(std::size_t vertexCount, std::span<const std::uint32_t> triangles,
+                        const Material& material);
+  // positions: x, y, z per vertex (3 * vertexCount floats).
+  void updateDynamicMesh(MeshId id, std::span<const float> positions);
+  // A collider or prop that never moves (see makeBox / makeCylinder / makeSphere).
+  MeshId addStaticMesh(std::span<const float> positions, std::span<const std::uint32_t> triangles,
+                       const Material& material);
+  MeshId addStaticMesh(const MeshData& mesh, const Material& material);
+  // A square checkered floor through `point` with the given normal, halfExtent from the point in
+  // each direction, tiles of tileSize alternating colourA/colourB. It receives shadows, casts
+  // none, fades into the bottom sky colour towards its edge and is left out of the shadow bounds.
+  MeshId addGround(glm::vec3 point, glm::vec3 normal, float halfExtent,
+                   glm::vec3 colourA = {0.78f, 0.78f, 0.76f},
+                   glm::vec3 colourB = {0.58f, 0.60f, 0.62f}, float tileSize = 0.5f);
+  void setMaterial(MeshId id, const Material& material);
+  void setVisible(MeshId id, bool visible);
+
+  // --- Scene.
+  void setCamera(const Camera& camera);
+  const Camera& camera() const;
+  void setLight(const Light& light);
+  void setSky(glm::vec3 top, glm::vec3 bottom);  // vertical gradient, top row = top colour
+  // Box the shadow map must cover (all shadow casters). Without it, the bounds of all visible
+  // meshes except grounds are used, recomputed every frame.
+  void setShadowBounds(glm::vec3 lo, glm::vec3 hi);
+  void clearShadowBounds();
+  // Bounds of all visible meshes except grounds (empty scene: lo > hi).
+  std::pair<glm::vec3, glm::vec3> sceneBounds() const;
+  // Text lines drawn top-left on a translucent dark backing (empty: no overlay). UTF-8.
+  void setOverlayText(std::vector<std::string> lines);
+
+  // --- Frames.
+  void render();
+  // The last rendered frame as RGBA8, rows TOP-DOWN (row 0 = top of the image), alpha 255.
+  void readPixels(std::vector<std::uint8_t>& rgba);
+  Image readImage();
+
+  const RenderTimings& timings() const;
+  void resetTimings();
+  // GL_RENDERER / GL_VERSION, for logs.
+  std::string glInfo() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace springy::render

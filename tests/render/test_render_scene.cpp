@@ -1,0 +1,343 @@
+// Rendering tests: orientation, exact sky colour, a lit and shadowed known scene, translucency,
+// overlay text, dynamic meshes and the mesh builders. Everything runs on OSMesa (llvmpipe).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+#include "render/camera.hpp"
+#include "render/error.hpp"
+#include "render/image.hpp"
+#include "render/mesh_builders.hpp"
+#include "render/renderer.hpp"
+#include "test_util.hpp"
+
+using namespace springy::render;
+using springy::render::test::luminance;
+using springy::render::test::pixel;
+using springy::render::test::regionMean;
+
+namespace {
+
+RenderSettings small(int w = 64, int h = 48, bool aa = false) {
+  RenderSettings s;
+  s.width = w;
+  s.height = h;
+  s.antiAlias = aa;
+  s.shadowMapSize = 1024;
+  return s;
+}
+
+glm::vec3 to255(glm::vec3 c) { return c * 255.0f; }
+
+// Optional: SPRINGY_RENDER_DUMP=dir writes the test frames as PNGs for a human to look at.
+void dump(const Image& img, const std::string& name) {
+  if (const char* dir = std::getenv("SPRINGY_RENDER_DUMP")) writePng(std::string(dir) + "/" + name, img);
+}
+
+}  // namespace
+
+TEST(RenderScene, UniformSkyIsExact) {
+  Renderer r(small());
+  const glm::vec3 sky(100.0f / 255.0f, 150.0f / 255.0f, 200.0f / 255.0f);
+  r.setSky(sky, sky);
+  r.render();
+  std::vector<std::uint8_t> rgba;
+  r.readPixels(rgba);
+  ASSERT_EQ(rgba.size(), 64u * 48u * 4u);
+  for (std::size_t i = 0; i < rgba.size(); i += 4) {
+    ASSERT_EQ(rgba[i], 100) << "pixel " << i / 4;
+    ASSERT_EQ(rgba[i + 1], 150) << "pixel " << i / 4;
+    ASSERT_EQ(rgba[i + 2], 200) << "pixel " << i / 4;
+    ASSERT_EQ(rgba[i + 3], 255) << "pixel " << i / 4;
+  }
+}
+
+TEST(RenderScene, GradientSkyTopRowIsTopColour) {
+  Renderer r(small());
+  r.setSky({1.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f});  // red top, blue bottom
+  r.render();
+  std::vector<std::uint8_t> rgba;
+  r.readPixels(rgba);
+  for (int x = 0; x < 64; ++x) {
+    const glm::vec3 top = pixel(rgba, 64, x, 0), bottom = pixel(rgba, 64, x, 47);
+    EXPECT_GE(top.r, 250.0f);
+    EXPECT_LE(top.b, 5.0f);
+    EXPECT_GE(bottom.b, 250.0f);
+    EXPECT_LE(bottom.r, 5.0f);
+  }
+  // Monotonic in between.
+  for (int y = 1; y < 48; ++y) EXPECT_LE(pixel(rgba, 64, 10, y).r, pixel(rgba, 64, 10, y - 1).r);
+}
+
+TEST(RenderScene, ObjectHighInViewLandsInTopHalf) {
+  Renderer r(small());
+  const glm::vec3 sky(0.5f);
+  r.setSky(sky, sky);
+  Camera cam;
+  cam.position = {0.0f, 0.0f, 5.0f};
+  cam.target = {0.0f, 0.0f, 0.0f};
+  r.setCamera(cam);
+  Material m;
+  m.colour = {1.0f, 0.1f, 0.1f};
+  r.addStaticMesh(makeBox({0.0f, 1.2f, 0.0f}, glm::vec3(0.3f)), m);
+  r.render();
+  std::vector<std::uint8_t> rgba;
+  r.readPixels(rgba);
+  int topCount = 0, bottomCount = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const glm::vec3 p = pixel(rgba, 64, x, y);
+      if (p.r > p.g + 40.0f) (y < 24 ? topCount : bottomCount)++;
+    }
+  EXPECT_GT(topCount, 10);
+  EXPECT_EQ(bottomCount, 0);
+  // And where the camera maths says it is.
+  const glm::vec3 c = projectToPixel(cam, {0.0f, 1.2f, 0.3f}, 64, 48);
+  const glm::vec3 p = pixel(rgba, 64, static_cast<int>(c.x), static_cast<int>(c.y));
+  EXPECT_GT(p.r, p.g + 40.0f);
+}
+
+// A red sphere above a uniformly coloured ground, light from above.
+class KnownScene : public ::testing::Test {
+protected:
+  static constexpr int W = 160, H = 120;
+  const glm::vec3 sphereColour{0.85f, 0.2f, 0.15f};
+  const glm::vec3 groundColour{0.7f, 0.7f, 0.7f};
+  const glm::vec3 sphereCentre{0.0f, 1.0f, 0.0f};
+  Light light;
+  Camera cam;
+
+  Image renderScene(bool shadows, bool aa) {
+    RenderSettings s = small(W, H, aa);
+    s.shadows = shadows;
+    Renderer r(s);
+    light.direction = {-0.2f, -1.0f, -0.1f};
+    light.colour = glm::vec3(1.0f);
+    light.ambient = glm::vec3(0.2f);
+    r.setLight(light);
+    cam.position = {0.0f, 2.5f, 5.0f};
+    cam.target = {0.0f, 0.5f, 0.0f};
+    r.setCamera(cam);
+    r.addGround({0.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, 60.0f, groundColour, groundColour);
+    Material m;
+    m.colour = sphereColour;
+    m.specular = 0.0f;
+    r.addStaticMesh(makeSphere(sphereCentre, 0.5f, 24, 48), m);
+    r.render();
+    return r.readImage();
+  }
+
+  // Where the sphere centre's shadow falls on the ground (y = 0).
+  glm::vec3 shadowPoint() const {
+    const glm::vec3 d = glm::normalize(light.direction);
+    return sphereCentre + d * (sphereCentre.y / -d.y);
+  }
+  // Expected display value of lit ground: colour * (ambient + n.l)^(1/2.2), see the mesh shader.
+  glm::vec3 expectedLitGround() const {
+    const float ndl = glm::dot(glm::vec3(0, 1, 0), -glm::normalize(light.direction));
+    const float k = std::pow(0.2f * 1.0f + ndl, 1.0f / 2.2f);
+    return glm::min(to255(groundColour) * k, glm::vec3(255.0f));
+  }
+};
+
+TEST_F(KnownScene, BodyColourShadowAndGroundLevel) {
+  const Image img = renderScene(true, true);
+  dump(img, "known_scene.png");
+  // The sphere centre projects onto the sphere: its colour, scaled by lighting (hue preserved).
+  const glm::vec3 c = projectToPixel(cam, sphereCentre, W, H);
+  const glm::vec3 body = regionMean(img.rgba, W, H, static_cast<int>(c.x), static_cast<int>(c.y), 1);
+  ASSERT_GT(glm::length(body), 30.0f);
+  const glm::vec3 hue = body / glm::length(body), want = sphereColour / glm::length(sphereColour);
+  EXPECT_NEAR(hue.r, want.r, 0.05f);
+  EXPECT_NEAR(hue.g, want.g, 0.05f);
+  EXPECT_NEAR(hue.b, want.b, 0.05f);
+
+  // Ground in the sphere's shadow is darker than ground far from it.
+  const glm::vec3 s = projectToPixel(cam, shadowPoint(), W, H);
+  const glm::vec3 far = projectToPixel(cam, {1.6f, 0.0f, 1.0f}, W, H);
+  ASSERT_TRUE(s.x >= 0 && s.x < W && s.y >= 0 && s.y < H);
+  ASSERT_TRUE(far.x >= 0 && far.x < W && far.y >= 0 && far.y < H);
+  const glm::vec3 shadowed = regionMean(img.rgba, W, H, static_cast<int>(s.x), static_cast<int>(s.y), 1);
+  const glm::vec3 lit = regionMean(img.rgba, W, H, static_cast<int>(far.x), static_cast<int>(far.y), 2);
+  EXPECT_LT(luminance(shadowed), 0.75f * luminance(lit));
+  // Lit ground matches the lighting model.
+  const glm::vec3 want2 = expectedLitGround();
+  EXPECT_NEAR(lit.r, want2.r, 6.0f);
+  EXPECT_NEAR(lit.g, want2.g, 6.0f);
+  EXPECT_NEAR(lit.b, want2.b, 6.0f);
+}
+
+TEST_F(KnownScene, NoShadowsWhenDisabled) {
+  const Image img = renderScene(false, false);
+  const glm::vec3 s = projectToPixel(cam, shadowPoint(), W, H);
+  const glm::vec3 shadowed = regionMean(img.rgba, W, H, static_cast<int>(s.x), static_cast<int>(s.y), 1);
+  const glm::vec3 want = expectedLitGround();
+  EXPECT_NEAR(luminance(shadowed), luminance(want), 6.0f);
+}
+
+TEST_F(KnownScene, AntiAliasingSoftensEdges) {
+  // Count pixels that are neither sphere-like nor ground-like along the silhouette: MSAA adds
+  // intermediate colours, so more distinct values appear.
+  auto distinct = [](const Image& img) {
+    std::vector<bool> seen(1 << 15, false);
+    int n = 0;
+    for (std::size_t i = 0; i < img.rgba.size(); i += 4) {
+      const int key = (img.rgba[i] >> 3) << 10 | (img.rgba[i + 1] >> 3) << 5 | (img.rgba[i + 2] >> 3);
+      if (!seen[static_cast<std::size_t>(key)]) seen[static_cast<std::size_t>(key)] = true, ++n;
+    }
+    return n;
+  };
+  const Image aa = renderScene(true, true), plain = renderScene(true, false);
+  EXPECT_GT(distinct(aa), distinct(plain));
+}
+
+TEST(RenderScene, TranslucentBodyShowsWhatIsBehind) {
+  RenderSettings s = small(96, 64);
+  Camera cam;
+  cam.position = {0.0f, 0.0f, 6.0f};
+  cam.target = {0.0f, 0.0f, 0.0f};
+  auto renderWith = [&](float alpha) {
+    Renderer r(s);
+    r.setCamera(cam);
+    Material back;
+    back.colour = {0.1f, 0.9f, 0.1f};
+    r.addStaticMesh(makeBox({0.0f, 0.0f, -2.0f}, {3.0f, 3.0f, 0.1f}), back);  // green wall
+    Material jelly;
+    jelly.colour = {0.9f, 0.1f, 0.9f};
+    jelly.alpha = alpha;
+    r.addStaticMesh(makeSphere({0.0f, 0.0f, 0.0f}, 1.0f), jelly);
+    r.render();
+    return r.readImage();
+  };
+  const Image opaque = renderWith(1.0f), jelly = renderWith(0.7f);
+  dump(opaque, "opaque.png");
+  dump(jelly, "jelly.png");
+  const glm::vec3 a = pixel(opaque.rgba, 96, 48, 32), b = pixel(jelly.rgba, 96, 48, 32);
+  EXPECT_LT(a.g, 60.0f);
+  EXPECT_GT(b.g, a.g + 15.0f);  // green wall shows through
+  EXPECT_GT(b.r, 60.0f);        // still mostly the jelly
+}
+
+TEST(RenderScene, DynamicMeshFollowsPositions) {
+  Renderer r(small(64, 48));
+  Camera cam;
+  cam.position = {0.0f, 0.0f, 5.0f};
+  cam.target = {0.0f, 0.0f, 0.0f};
+  r.setCamera(cam);
+  r.setSky(glm::vec3(0.0f), glm::vec3(0.0f));
+  const MeshData box = makeBox({0.0f, 0.0f, 0.0f}, glm::vec3(0.3f));
+  Material m;
+  m.colour = {1.0f, 1.0f, 1.0f};
+  const MeshId id = r.addDynamicMesh(box.vertexCount(), box.indices, m);
+  auto brightCentroidX = [&](float dx) {
+    std::vector<float> pos = box.positions;
+    for (std::size_t i = 0; i < pos.size(); i += 3) pos[i] += dx;
+    r.updateDynamicMesh(id, pos);
+    r.render();
+    std::vector<std::uint8_t> rgba;
+    r.readPixels(rgba);
+    double sx = 0;
+    int n = 0;
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x)
+        if (pixel(rgba, 64, x, y).r > 20.0f) sx += x, ++n;
+    return n ? sx / n : -1.0;
+  };
+  const double left = brightCentroidX(-1.0f), right = brightCentroidX(1.0f);
+  ASSERT_GT(left, 0.0);
+  EXPECT_GT(right - left, 15.0);
+  EXPECT_THROW(r.updateDynamicMesh(id, std::vector<float>(5, 0.0f)), RenderError);
+  EXPECT_EQ(r.timings().frames, 2u);
+  EXPECT_GT(r.timings().renderMs, 0.0);
+}
+
+TEST(RenderScene, OverlayTextDrawsTopLeft) {
+  RenderSettings s = small(256, 128);
+  const glm::vec3 sky(0.5f);
+  auto frame = [&](bool text) {
+    Renderer r(s);
+    r.setSky(sky, sky);
+    if (text) r.setOverlayText({"jelly drop", "t = 1.50 s", "implicit Euler, dt = 1 ms"});
+    r.render();
+    return r.readImage();
+  };
+  const Image plain = frame(false), text = frame(true);
+  dump(text, "overlay.png");
+  int changedTopLeft = 0, changedBottomRight = 0;
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 256; ++x) {
+      const bool diff = pixel(plain.rgba, 256, x, y) != pixel(text.rgba, 256, x, y);
+      if (x < 128 && y < 64) changedTopLeft += diff;
+      if (x >= 200 && y >= 100) changedBottomRight += diff;
+    }
+  EXPECT_GT(changedTopLeft, 500);
+  EXPECT_EQ(changedBottomRight, 0);
+  // White glyph pixels exist (text brighter than the grey sky).
+  int white = 0;
+  for (std::size_t i = 0; i < text.rgba.size(); i += 4) white += text.rgba[i] > 230;
+  EXPECT_GT(white, 20);
+}
+
+TEST(RenderScene, BadFontPathThrowsNamingPath) {
+  RenderSettings s = small();
+  s.fontPath = "/nonexistent/font.ttf";
+  Renderer r(s);
+  r.setOverlayText({"x"});
+  try {
+    r.render();
+    FAIL() << "expected RenderError";
+  } catch (const RenderError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/font.ttf"), std::string::npos);
+  }
+}
+
+TEST(RenderScene, FrameBoundsShowsTheWholeBox) {
+  const glm::vec3 lo(-2.0f, 0.0f, -1.0f), hi(3.0f, 4.0f, 1.5f);
+  const Camera cam = frameBounds(lo, hi, 16.0f / 9.0f);
+  for (int i = 0; i < 8; ++i) {
+    const glm::vec3 corner((i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z);
+    const glm::vec3 p = projectToPixel(cam, corner, 1280, 720);
+    EXPECT_GE(p.x, 0.0f);
+    EXPECT_LE(p.x, 1280.0f);
+    EXPECT_GE(p.y, 0.0f);
+    EXPECT_LE(p.y, 720.0f);
+    EXPECT_LT(p.z, 1.0f);
+  }
+}
+
+TEST(RenderScene, InvalidInputsThrow) {
+  Renderer r(small());
+  const std::vector<float> pos{0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::vector<std::uint32_t> bad{0, 1, 3};
+  EXPECT_THROW(r.addStaticMesh(pos, bad, Material{}), RenderError);
+  EXPECT_THROW(r.addDynamicMesh(3, std::vector<std::uint32_t>{0, 1}, Material{}), RenderError);
+  EXPECT_THROW(r.updateDynamicMesh(99, pos), RenderError);
+  EXPECT_THROW(Renderer(small(0, 10)), RenderError);
+}
+
+// Every builder makes closed meshes wound counter-clockwise seen from outside.
+TEST(MeshBuilders, OutwardWinding) {
+  const glm::vec3 c(0.5f, 1.0f, -0.5f);
+  for (const MeshData& m : {makeBox(c, {0.5f, 0.2f, 0.3f}), makeSphere(c, 0.7f),
+                            makeCylinder(c - glm::vec3(0.1f, 0.5f, 0), c + glm::vec3(0.1f, 0.5f, 0), 0.1f)}) {
+    ASSERT_EQ(m.indices.size() % 3, 0u);
+    ASSERT_GT(m.indices.size(), 0u);
+    double signedVolume = 0.0;
+    for (std::size_t t = 0; t < m.indices.size(); t += 3) {
+      auto P = [&](std::uint32_t i) {
+        return glm::dvec3(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]) -
+               glm::dvec3(c);
+      };
+      const glm::dvec3 a = P(m.indices[t]), b = P(m.indices[t + 1]), d = P(m.indices[t + 2]);
+      const double v = glm::dot(a, glm::cross(b, d));
+      EXPECT_GE(v, -1e-9) << "triangle " << t / 3 << " winds inward";
+      signedVolume += v / 6.0;
+    }
+    EXPECT_GT(signedVolume, 0.0);
+  }
+  const MeshData box = makeBox(c, glm::vec3(1.0f));
+  EXPECT_EQ(box.vertexCount(), 24u);
+  EXPECT_EQ(box.indices.size(), 36u);
+}

@@ -65,7 +65,6 @@ uniform vec3 uGroundV;
 uniform vec3 uGroundB;
 uniform float uTile;
 uniform float uGroundExtent;
-uniform vec3 uFogColour;
 out vec4 fragColour;
 
 vec3 toLinear(vec3 c) { return pow(max(c, vec3(0.0)), vec3(2.2)); }
@@ -108,8 +107,8 @@ void main() {
   float hemi = 0.75 + 0.25 * n.y;
   vec3 lit = albedo * (uAmbient * hemi + uLightColour * ndl * shadow) + uLightColour * spec * shadow;
   vec3 colour = toDisplay(lit);
-  colour = mix(colour, uFogColour, fog);
-  fragColour = vec4(colour, uAlpha);
+  // The ground fades out towards its edge (blended over the sky behind it).
+  fragColour = vec4(colour, uAlpha * (1.0 - fog));
 }
 )";
 
@@ -580,14 +579,21 @@ struct Renderer::Impl {
     meshProg.set("uShadowStep",
                  settings.shadowSoftness / static_cast<float>(std::max(settings.shadowMapSize, 1)));
     meshProg.set("uShadowMap", 0);
-    meshProg.set("uFogColour", skyBottom);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, shadowTex);
-    std::vector<const GpuMesh*> translucent;
+    std::vector<const GpuMesh*> translucent, grounds;
     for (const GpuMesh& m : meshes) {
       if (!drawable(m)) continue;
-      if (m.material.alpha < 1.0f) translucent.push_back(&m);
+      if (m.ground) grounds.push_back(&m);
+      else if (m.material.alpha < 1.0f) translucent.push_back(&m);
       else drawMesh(m);
+    }
+    // Grounds after the other opaque meshes: their faded edge blends over what is behind.
+    if (!grounds.empty()) {
+      glEnable(GL_BLEND);
+      glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+      for (const GpuMesh* g : grounds) drawMesh(*g);
+      glDisable(GL_BLEND);
     }
     if (!translucent.empty()) {
       auto dist = [&](const GpuMesh* m) {

@@ -1,0 +1,108 @@
+// `springy check`: runs scenes headlessly under the stability monitor and reports per body.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "app/atomic_file.h"
+#include "app/commands.h"
+#include "app/runner.h"
+#include "sim/error.h"
+
+namespace springy {
+namespace {
+
+void writeTraceHeader(std::ostream& out) {
+  out << "scene,time,body,centroid_x,centroid_y,centroid_z,volume,kinetic,gravitational,elastic,total,max_strain\n";
+}
+
+void writeTraceRow(std::ostream& out, const std::string& scene, double t, const std::string& body, const BodyMeasures& m) {
+  char line[512];
+  std::snprintf(line, sizeof line, ",%.6f,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n", t, body.c_str(),
+                m.centroid.x, m.centroid.y, m.centroid.z, m.volume, m.kinetic, m.gravitational, m.elastic, m.total(),
+                m.maxStrain);
+  out << scene << line;
+}
+
+}  // namespace
+
+int runCheck(const CheckOptions& options) {
+  std::unique_ptr<AtomicFile> traceFile;
+  std::ofstream trace;
+  if (!options.trace.empty()) {
+    traceFile = std::make_unique<AtomicFile>(options.trace);
+    trace.open(traceFile->temporaryPath());
+    writeTraceHeader(trace);
+  }
+  int failures = 0;
+  for (const std::string& path : options.scenes) {
+    SceneDesc scene;
+    try {
+      scene = loadSceneWith(path, options.overrides);
+    } catch (const Error& e) {
+      std::cerr << "springy check: " << e.what() << "\n";
+      ++failures;
+      continue;
+    }
+    const auto wallStart = std::chrono::steady_clock::now();
+    World world(buildModel(scene), scene.integrator, stepSize(scene));
+    Monitor monitor(world);
+    std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%d substeps), %g s\n", path.c_str(),
+                scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
+                std::string(integratorName(scene.integrator)).c_str(), scene.dt, scene.substeps, scene.duration);
+    std::printf("  stages: forces [");
+    for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
+      std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
+    }
+    std::printf("], collide: %s\n", world.collides() ? "yes" : "no");
+    // Sample at the render frame rate: the states a video would show are the ones checked.
+    const double frame = 1.0 / scene.render.fps;
+    const long frames = std::lround(scene.duration / frame);
+    std::optional<Failure> failure;
+    for (long k = 1; k <= frames && !failure; ++k) {
+      if (interrupted()) {
+        std::cerr << "springy check: interrupted\n";
+        return 130;
+      }
+      failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
+      if (trace.is_open()) {
+        for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
+          writeTraceRow(trace, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
+        }
+      }
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+    std::printf("  %-16s %9s %8s %8s %10s %10s %9s %10s %10s %10s %10s %s\n", "body", "steps", "sim[s]", "wall[s]",
+                "max strain", "max pen[m]", "vol min", "vol end", "kinetic", "grav", "elastic", "rest");
+    for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
+      const BodyRecord& r = monitor.records()[b];
+      const BodyInfo& info = world.model().bodies[b];
+      const bool atRest = r.last.rmsSpeed < 1e-3 * info.restSize / 1.0;
+      std::printf("  %-16s %9llu %8.3f %8.2f %10.4f %10.2e %9.3f %10.3f %10.4g %10.4g %10.4g %s\n", info.name.c_str(),
+                  static_cast<unsigned long long>(world.stepCount()), world.time(), wall, r.maxStrain,
+                  r.maxPenetration, r.minVolumeRatio, r.last.volume / info.restVolume, r.last.kinetic,
+                  r.last.gravitational, r.last.elastic, atRest ? "yes" : "no");
+      if (monitor.energyChecked()) {
+        std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
+                    r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
+      }
+    }
+    if (failure) {
+      std::printf("  FAILED: %s\n", failure->message.c_str());
+      std::cerr << "springy check: " << path << ": " << failure->message << "\n";
+      ++failures;
+    } else {
+      std::printf("  ok\n");
+    }
+  }
+  if (traceFile) {
+    trace.close();
+    if (!trace) throw Error(options.trace + ": writing the trace failed");
+    traceFile->commit();
+  }
+  return failures == 0 ? 0 : 1;
+}
+
+}  // namespace springy

@@ -1,0 +1,27 @@
+// springy app: loading a scene with command-line overrides and stepping it frame by frame
+// under the stability monitor. Shared by `check`, `render` and `frames`.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "sim/monitor.h"
+#include "sim/scene.h"
+
+namespace springy {
+
+struct RunOverrides {
+  std::optional<std::string> integrator;
+  std::optional<double> dt, duration;
+  std::optional<int> substeps;
+};
+
+// Loads a scene and applies the overrides. Throws springy::Error.
+SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides);
+
+// Steps `world` until `time` (within half a step), checking the monitor after the last step.
+// Returns the failure, if any.
+std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time);
+
+}  // namespace springy

@@ -1,0 +1,97 @@
+#include "sim/monitor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace springy {
+namespace {
+
+// The lowest point any collider offers along gravity (where a falling body could end up), or
+// the body's own rest size below it when there are no colliders.
+double supportHeight(const Model& model, const Vec3& up, double fallback) {
+  double lowest = fallback;
+  bool any = false;
+  auto consider = [&](double h) {
+    lowest = any ? std::min(lowest, h) : h;
+    any = true;
+  };
+  for (const PlaneCollider& p : model.colliders.planes) {
+    if (dot(p.normal, up) > 0.5) consider(dot(p.point, up));
+  }
+  for (const TriangleCollider& t : model.colliders.meshes) {
+    for (const Vec3& p : t.mesh.positions) consider(dot(p, up));
+  }
+  return lowest;
+}
+
+std::string describe(const World& world, uint32_t body, const std::string& what, const std::string& advice) {
+  std::ostringstream s;
+  s << "body '" << world.model().bodies[body].name << "' at step " << world.stepCount() << " (t = " << world.time()
+    << " s): " << what << ". " << advice;
+  return s.str();
+}
+
+const char* kStepAdvice =
+    "Try a smaller dt or more substeps (--substeps), a more stable integrator (rk4, verlet), or softer springs "
+    "(longer strut_period / hinge_period); `springy suggest` estimates a stable dt.";
+
+}  // namespace
+
+Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
+  const Model& model = world.model();
+  // With wind, energy is injected from outside: the energy check would be meaningless.
+  checkEnergy_ = !model.wind.has_value();
+  const double g = length(model.gravity);
+  const Vec3 up = g > 0.0 ? model.gravity / -g : Vec3{0, 1, 0};
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    BodyRecord r;
+    r.start = r.last = measureBody(world, b);
+    const BodyInfo& info = model.bodies[b];
+    const double height = dot(r.start.centroid, up) - supportHeight(model, up, dot(r.start.centroid, up) - info.restSize);
+    // The energy the body has to spend: kinetic + elastic + the fall to its support.
+    r.energyScale = r.start.kinetic + r.start.elastic + info.mass * g * std::max(info.restSize, height);
+    if (!(r.energyScale > 0.0)) r.energyScale = 1e-12;
+    records_.push_back(r);
+  }
+}
+
+std::optional<Failure> Monitor::check(const World& world) {
+  const Model& model = world.model();
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    BodyRecord& r = records_[b];
+    const BodyInfo& info = model.bodies[b];
+    const BodyMeasures m = measureBody(world, b);
+    r.last = m;
+    auto fail = [&](const std::string& what, const std::string& advice) {
+      return Failure{b, world.stepCount(), world.time(), describe(world, b, what, advice)};
+    };
+    if (!m.finite) return fail("a position or velocity is NaN or infinite", kStepAdvice);
+    if (m.size > limits_.sizeFactor * info.restSize) {
+      std::ostringstream s;
+      s << "it blew up to " << m.size / info.restSize << " times its rest size";
+      return fail(s.str(), kStepAdvice);
+    }
+    if (checkEnergy_ && m.total() - r.start.total() > limits_.energyTolerance * r.energyScale) {
+      std::ostringstream s;
+      s << "its total energy rose from " << r.start.total() << " J to " << m.total()
+        << " J although nothing injects energy (the integration is unstable or too coarse)";
+      return fail(s.str(), kStepAdvice);
+    }
+    if (m.penetration > limits_.penetration * info.restSize) {
+      std::ostringstream s;
+      s << "a vertex is " << m.penetration << " m behind a plane";
+      return fail(s.str(), "This is a bug in contact handling if dt is sane; please report the scene.");
+    }
+    r.maxStrain = std::max(r.maxStrain, m.maxStrain);
+    r.maxPenetration = std::max(r.maxPenetration, m.penetration);
+    if (info.restVolume > 0.0) {
+      const double ratio = m.volume / info.restVolume;
+      r.minVolumeRatio = std::min(r.minVolumeRatio, ratio);
+      r.maxVolumeRatio = std::max(r.maxVolumeRatio, ratio);
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace springy

@@ -430,7 +430,6 @@ struct Renderer::Impl {
   // when the bounds change a little from frame to frame.
   glm::mat4 lightViewProj(const Bounds& b, float& texelWorld) const {
     const glm::vec3 d = glm::normalize(light.direction);
-    const glm::vec3 centre = 0.5f * (b.lo + b.hi);
     const float radius = std::max(0.5f * glm::length(b.hi - b.lo), 1e-3f);
     const glm::vec3 up = std::abs(d.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
     // View matrix at the origin-aligned light basis (translation-free, so snapping is stable).
@@ -448,17 +447,18 @@ struct Renderer::Impl {
     glm::vec2 mid(0.5f * (ls.lo.x + ls.hi.x), 0.5f * (ls.lo.y + ls.hi.y));
     mid = glm::floor(mid / texel) * texel;
     texelWorld = texel;
-    (void)centre;
     const float nearZ = -ls.hi.z - pad, farZ = -ls.lo.z + pad;
     const glm::mat4 proj = glm::ortho(mid.x - 0.5f * size, mid.x + 0.5f * size, mid.y - 0.5f * size,
                                       mid.y + 0.5f * size, nearZ, farZ);
     return proj * view;
   }
 
+  // Rasterises the overlay lines into a premultiplied-alpha texture. Throws (and stays dirty,
+  // so the next frame throws again) if the font cannot be loaded.
   void rebuildOverlay() {
-    overlayDirty = false;
     if (overlayLines.empty()) {
       overlayW = overlayH = 0;
+      overlayDirty = false;
       return;
     }
     if (!font) {
@@ -492,6 +492,7 @@ struct Renderer::Impl {
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     overlayW = img.width;
     overlayH = img.height;
+    overlayDirty = false;
   }
 
   // layerAlpha: a translucent body is drawn as two layers (inside, then outside); each gets the

@@ -38,8 +38,10 @@ void dump(const Image& img, const std::string& name) {
 
 }  // namespace
 
-TEST(RenderScene, UniformSkyIsExact) {
-  Renderer r(small());
+class UniformSky : public ::testing::TestWithParam<bool> {};
+
+TEST_P(UniformSky, EveryPixelIsTheSkyColour) {
+  Renderer r(small(64, 48, GetParam()));
   const glm::vec3 sky(100.0f / 255.0f, 150.0f / 255.0f, 200.0f / 255.0f);
   r.setSky(sky, sky);
   r.render();
@@ -53,6 +55,8 @@ TEST(RenderScene, UniformSkyIsExact) {
     ASSERT_EQ(rgba[i + 3], 255) << "pixel " << i / 4;
   }
 }
+INSTANTIATE_TEST_SUITE_P(RenderScene, UniformSky, ::testing::Values(false, true),
+                         [](const auto& p) { return p.param ? "MSAA" : "NoAA"; });
 
 TEST(RenderScene, GradientSkyTopRowIsTopColour) {
   Renderer r(small());

@@ -18,7 +18,14 @@ extern "C" {
 #include <unistd.h>
 #include <vector>
 
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+
 #include "render/error.hpp"
+#include "render/renderer.hpp"
+#include "render/mesh_builders.hpp"
 #include "render/video_encoder.hpp"
 
 using namespace springy::render;
@@ -221,4 +228,63 @@ TEST_F(VideoTest, BadArgumentsThrow) {
   enc.open((dir / "ok.mp4").string(), W, H, FPS);
   EXPECT_THROW(enc.writeFrame(std::vector<std::uint8_t>(10)), RenderError);
   enc.finish();
+}
+
+// The app's pattern: render on the main thread, encode on a dedicated thread.
+TEST_F(VideoTest, RendererFramesEncodedOnAnotherThread) {
+  RenderSettings rs;
+  rs.width = W;
+  rs.height = H;
+  Renderer r(rs);
+  r.addGround({0, 0, 0}, {0, 1, 0}, 20.0f);
+  const MeshData box = makeBox({0, 0.5f, 0}, glm::vec3(0.5f));
+  const MeshId id = r.addDynamicMesh(box.vertexCount(), box.indices, Material{});
+  r.setCamera(frameBounds({-1, 0, -1}, {1, 2, 1}, r.aspect()));
+
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::deque<std::vector<std::uint8_t>> queue;
+  bool done = false;
+  const std::string path = (dir / "threaded.mp4").string();
+  std::string error;
+  std::thread encoder([&] {
+    try {
+      VideoEncoder enc;
+      enc.open(path, W, H, FPS);
+      for (;;) {
+        std::unique_lock lock(mutex);
+        cv.wait(lock, [&] { return done || !queue.empty(); });
+        if (queue.empty()) break;
+        std::vector<std::uint8_t> f = std::move(queue.front());
+        queue.pop_front();
+        lock.unlock();
+        enc.writeFrame(f);
+      }
+      enc.finish();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  });
+  for (int k = 0; k < 12; ++k) {
+    std::vector<float> pos = box.positions;
+    for (std::size_t i = 0; i < pos.size(); i += 3) pos[i] += 0.1f * static_cast<float>(k);
+    r.updateDynamicMesh(id, pos);
+    r.render();
+    std::vector<std::uint8_t> rgba;
+    r.readPixels(rgba);
+    {
+      std::lock_guard lock(mutex);
+      queue.push_back(std::move(rgba));
+    }
+    cv.notify_one();
+  }
+  {
+    std::lock_guard lock(mutex);
+    done = true;
+  }
+  cv.notify_one();
+  encoder.join();
+  ASSERT_EQ(error, "");
+  const Decoded d = decode(path);
+  EXPECT_EQ(d.frames.size(), 12u);
 }

@@ -1,6 +1,7 @@
 // springy app: the subcommands.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,5 +15,32 @@ struct CheckOptions {
   std::string trace;  // CSV path, empty for none
 };
 int runCheck(const CheckOptions& options);
+
+// Command-line overrides of a scene's [render] table.
+struct RenderOverrides {
+  std::optional<int> width, height, crf;
+  std::optional<double> fps;
+  std::optional<std::string> preset;
+  bool noOverlay = false, noShadows = false, noAntialias = false;
+};
+
+struct RenderOptions {
+  std::vector<std::string> scenes;
+  std::string output;  // a file for one scene, or a directory
+  RunOverrides overrides;
+  RenderOverrides render;
+};
+int runRender(const RenderOptions& options);
+
+struct FramesOptions {
+  std::vector<std::string> scenes;
+  std::string output = ".";  // directory
+  std::string times;         // comma-separated seconds; empty: eight evenly spaced
+  bool sheet = false;        // also a contact sheet
+  bool sheetOnly = false;    // only the contact sheet
+  RunOverrides overrides;
+  RenderOverrides render;
+};
+int runFrames(const FramesOptions& options);
 
 }  // namespace springy

@@ -9,12 +9,22 @@
 namespace {
 
 void addRunOverrides(CLI::App* cmd, springy::RunOverrides& o) {
-  cmd->add_option("--integrator", o.integrator,
-                  "Override the scene's integrator: " + springy::integratorNames());
+  cmd->add_option("--integrator", o.integrator, "Override the scene's integrator: " + springy::integratorNames());
   cmd->add_option("--dt", o.dt, "Override the scene's time step [s]");
   cmd->add_option("--substeps", o.substeps, "Steps of dt/N per dt");
   cmd->add_option("--duration", o.duration, "Override the simulated duration [s]");
 }
+
+#ifdef SPRINGY_HAVE_RENDER
+void addRenderOverrides(CLI::App* cmd, springy::RenderOverrides& o) {
+  cmd->add_option("--width", o.width, "Frame width in pixels (even)");
+  cmd->add_option("--height", o.height, "Frame height in pixels (even)");
+  cmd->add_option("--fps", o.fps, "Frames per second");
+  cmd->add_flag("--no-overlay", o.noOverlay, "No text overlay");
+  cmd->add_flag("--no-shadows", o.noShadows, "No shadow pass");
+  cmd->add_flag("--no-antialias", o.noAntialias, "No multisampling");
+}
+#endif
 
 }  // namespace
 
@@ -29,10 +39,36 @@ int main(int argc, char** argv) {
   addRunOverrides(checkCmd, check.overrides);
   checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV");
 
+#ifdef SPRINGY_HAVE_RENDER
+  springy::RenderOptions render;
+  CLI::App* renderCmd = app.add_subcommand("render", "Simulate scenes and encode MP4 videos (H.264)");
+  renderCmd->add_option("scenes", render.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  renderCmd->add_option("-o,--output", render.output,
+                        "Output .mp4 for one scene, or a directory (default: SCENE.mp4 here)");
+  addRunOverrides(renderCmd, render.overrides);
+  addRenderOverrides(renderCmd, render.render);
+  renderCmd->add_option("--crf", render.render.crf, "H.264 quality, 0-51, lower is better");
+  renderCmd->add_option("--preset", render.render.preset, "x264 preset (ultrafast ... veryslow)");
+
+  springy::FramesOptions frames;
+  CLI::App* framesCmd = app.add_subcommand("frames", "Write PNG stills at chosen times, and a contact sheet");
+  framesCmd->add_option("scenes", frames.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  framesCmd->add_option("-o,--output", frames.output, "Output directory")->capture_default_str();
+  framesCmd->add_option("--times", frames.times, "Comma-separated times in seconds (default: 8 evenly spaced)");
+  framesCmd->add_flag("--sheet", frames.sheet, "Also write SCENE_sheet.png, a labelled grid of the stills");
+  framesCmd->add_flag("--sheet-only", frames.sheetOnly, "Write only the contact sheet");
+  addRunOverrides(framesCmd, frames.overrides);
+  addRenderOverrides(framesCmd, frames.render);
+#endif
+
   CLI11_PARSE(app, argc, argv);
   springy::installInterruptHandler();
   try {
     if (checkCmd->parsed()) return springy::runCheck(check);
+#ifdef SPRINGY_HAVE_RENDER
+    if (renderCmd->parsed()) return springy::runRender(render);
+    if (framesCmd->parsed()) return springy::runFrames(frames);
+#endif
   } catch (const springy::Error& e) {
     std::cerr << "springy: " << e.what() << "\n";
     return 1;

@@ -1,0 +1,123 @@
+#include "app/scene_view.h"
+
+#include <cmath>
+#include <cstdio>
+
+namespace springy {
+namespace {
+
+glm::vec3 toGlm(const Vec3& v) { return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}; }
+
+render::Material toMaterial(const Material& m) {
+  render::Material r;
+  r.colour = toGlm(m.color);
+  r.alpha = static_cast<float>(m.alpha);
+  r.shininess = static_cast<float>(m.shininess);
+  return r;
+}
+
+// Euler angles (degrees, z then x then y, as the original Unity scenes) applied to +z.
+Vec3 forwardFromAngles(const Vec3& degrees) {
+  const double rx = degrees.x * kPi / 180, ry = degrees.y * kPi / 180;
+  const Vec3 f{0.0, -std::sin(rx), std::cos(rx)};  // pitch about x (roll about z leaves +z alone)
+  return {f.x * std::cos(ry) + f.z * std::sin(ry), f.y, -f.x * std::sin(ry) + f.z * std::cos(ry)};
+}
+
+}  // namespace
+
+render::RenderSettings renderSettingsOf(const SceneDesc& scene) {
+  render::RenderSettings s;
+  s.width = scene.render.width;
+  s.height = scene.render.height;
+  s.antiAlias = scene.render.antialias;
+  s.shadows = scene.render.shadows;
+  s.shadowMapSize = scene.render.shadowMapSize;
+  return s;
+}
+
+SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderSettings settings)
+    : scene_(scene), renderer_(settings) {
+  const Model& model = world.model();
+  const RenderDesc& rd = scene.render;
+  Bounds all = boundsOf(world.positions());
+  // Bodies: topology once, body-local indices.
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    const BodyInfo& info = model.bodies[b];
+    std::vector<uint32_t> indices;
+    indices.reserve(static_cast<std::size_t>(info.faceCount) * 3);
+    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
+      for (uint32_t v : model.faces[f]) indices.push_back(v - info.firstVertex);
+    }
+    bodyMeshes_.push_back(renderer_.addDynamicMesh(info.vertexCount, indices, toMaterial(scene.bodyMaterials[b])));
+  }
+  for (const PlaneDesc& p : scene.planes) {
+    if (!p.visible) continue;
+    const glm::vec3 c = toGlm(p.material.color);
+    // Two tones of the plane's colour make the checker that shows depth.
+    renderer_.addGround(toGlm(p.collider.point), toGlm(p.collider.normal), static_cast<float>(p.extent), c * 1.12f,
+                        c * 0.88f, 2.0f);
+  }
+  for (const TriangleColliderDesc& t : scene.triangleColliders) {
+    const TriMesh& m = t.collider.mesh;
+    all = {componentMin(all.lo, boundsOf(m.positions).lo), componentMax(all.hi, boundsOf(m.positions).hi)};
+    if (!t.visible) continue;
+    std::vector<float> xyz;
+    std::vector<uint32_t> indices;
+    for (const Vec3& p : m.positions) {
+      for (int k = 0; k < 3; ++k) xyz.push_back(static_cast<float>(p[k]));
+    }
+    for (const Triangle& tri : m.triangles) indices.insert(indices.end(), tri.begin(), tri.end());
+    renderer_.addStaticMesh(xyz, indices, toMaterial(t.material));
+  }
+  for (const PropDesc& p : scene.props) {
+    const render::MeshData mesh = p.shape == PropDesc::Shape::Box
+                                      ? render::makeBox(toGlm(p.center), toGlm(p.size) * 0.5f)
+                                      : render::makeCylinder(toGlm(p.from), toGlm(p.to), static_cast<float>(p.radius));
+    renderer_.addStaticMesh(mesh, toMaterial(p.material));
+  }
+  // Camera: the scene's, or one that frames everything that moves or collides.
+  render::Camera camera;
+  if (rd.camera.position) {
+    camera.position = toGlm(*rd.camera.position);
+    camera.target = rd.camera.target ? toGlm(*rd.camera.target)
+                    : toGlm(*rd.camera.position + forwardFromAngles(rd.camera.angles.value_or(Vec3{})));
+    camera.fovYDeg = static_cast<float>(rd.camera.fov);
+    camera.farPlane = 1000.0f;
+    camera.nearPlane = 0.1f;
+  } else {
+    camera = render::frameBounds(toGlm(all.lo), toGlm(all.hi), renderer_.aspect(), static_cast<float>(rd.camera.fov));
+  }
+  renderer_.setCamera(camera);
+  render::Light light;
+  light.direction = toGlm(forwardFromAngles(rd.light.angles));
+  light.colour = toGlm(rd.light.color) * 0.9f;
+  light.ambient = glm::vec3(static_cast<float>(rd.light.ambient));
+  renderer_.setLight(light);
+  renderer_.setSky(toGlm(rd.skyTop), toGlm(rd.skyBottom));
+}
+
+void SceneView::draw(const World& world) {
+  const Model& model = world.model();
+  const std::vector<Vec3>& x = world.positions();
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    const BodyInfo& info = model.bodies[b];
+    positions_.resize(static_cast<std::size_t>(info.vertexCount) * 3);
+    for (uint32_t i = 0; i < info.vertexCount; ++i) {
+      const Vec3& p = x[info.firstVertex + i];
+      positions_[3 * i + 0] = static_cast<float>(p.x);
+      positions_[3 * i + 1] = static_cast<float>(p.y);
+      positions_[3 * i + 2] = static_cast<float>(p.z);
+    }
+    renderer_.updateDynamicMesh(bodyMeshes_[b], positions_);
+  }
+  if (scene_.render.overlay) {
+    char time[64], method[96];
+    std::snprintf(time, sizeof time, "t = %.2f s", world.time());
+    std::snprintf(method, sizeof method, "%s, dt = %g ms%s", std::string(integratorName(world.integrator())).c_str(),
+                  world.dt() * 1000.0, "");
+    renderer_.setOverlayText({scene_.name, time, method});
+  }
+  renderer_.render();
+}
+
+}  // namespace springy

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Installs what springy needs, builds it and runs the main job on the default scene.
+# Installs what springy needs, builds it and renders the default scene to single_sphere.mp4.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh
-./build/app/springy check scenes/single_sphere.toml
+./build/app/springy render scenes/single_sphere.toml -o single_sphere.mp4

@@ -1,0 +1,123 @@
+// The springy command as a user runs it: exit codes, messages, and output files that are
+// complete or absent.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int status;
+  std::string output;  // stdout and stderr
+};
+
+Result run(const std::string& args) {
+  const std::string command = std::string(SPRINGY_BINARY) + " " + args + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  Result r{-1, ""};
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe.get())) r.output += buffer.data();
+  const int raw = pclose(pipe.release());
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  return r;
+}
+
+std::string data(const std::string& name) { return std::string(SPRINGY_SOURCE_DIR) + "/tests/data/app/" + name; }
+
+class AppTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("springy_app_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::size_t filesIn(const fs::path& d) const {
+    return static_cast<std::size_t>(std::distance(fs::directory_iterator(d), fs::directory_iterator{}));
+  }
+  fs::path dir_;
+};
+
+TEST_F(AppTest, CheckPassesAStableSceneAndReportsPerBody) {
+  const Result r = run("check " + data("tiny.toml"));
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("ball"), std::string::npos);
+  EXPECT_NE(r.output.find("ok"), std::string::npos);
+}
+
+TEST_F(AppTest, CheckNamesTheBodyStepAndRemedyOfABlowUp) {
+  const Result r = run("check " + data("unstable.toml"));
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("body 'stiff ball' at step"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("smaller dt"), std::string::npos) << r.output;
+}
+
+TEST_F(AppTest, UnknownSceneKeyIsReportedWithFileAndLine) {
+  const Result r = run("check " + data("typo.toml"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("typo.toml:6:1: unknown key 'masss'"), std::string::npos) << r.output;
+}
+
+TEST_F(AppTest, TraceIsWrittenWithOneRowPerFrameAndBody) {
+  const fs::path trace = dir_ / "trace.csv";
+  const Result r = run("check " + data("tiny.toml") + " --trace " + trace.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream in(trace);
+  std::string line;
+  int rows = -1;  // header
+  while (std::getline(in, line)) ++rows;
+  EXPECT_EQ(rows, 10);  // 1 s at 10 frames/s, one body
+  EXPECT_EQ(filesIn(dir_), 1u);
+}
+
+TEST_F(AppTest, RenderWritesAVideoAndNoTemporaryFiles) {
+  const fs::path out = dir_ / "tiny.mp4";
+  const Result r = run("render " + data("tiny.toml") + " -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_GT(fs::file_size(out), 1000u);
+  EXPECT_EQ(filesIn(dir_), 1u);
+}
+
+TEST_F(AppTest, UnstableRenderKeepsTheExistingFileAndLeavesNoTemporaryFile) {
+  const fs::path out = dir_ / "video.mp4";
+  { std::ofstream(out) << "a good video from before"; }
+  const Result r = run("render " + data("unstable.toml") + " -o " + out.string());
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("not written"), std::string::npos) << r.output;
+  std::ifstream in(out);
+  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(content, "a good video from before");
+  EXPECT_EQ(filesIn(dir_), 1u);
+}
+
+TEST_F(AppTest, UnwritableTargetIsReportedBeforeSimulating) {
+  const Result r = run("render " + data("tiny.toml") + " -o " + (dir_ / "no" / "such" / "dir" / "x.mp4").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("cannot write here"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("frames"), std::string::npos) << "simulation started: " << r.output;
+}
+
+TEST_F(AppTest, FramesWritesStillsAndASheet) {
+  const Result r = run("frames " + data("tiny.toml") + " -o " + dir_.string() + " --times 0,0.5 --sheet");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir_ / "tiny_t000.00.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "tiny_t000.50.png"));
+  EXPECT_TRUE(fs::exists(dir_ / "tiny_sheet.png"));
+  EXPECT_EQ(filesIn(dir_), 3u);
+}
+
+TEST_F(AppTest, BadTimesAreRejected) {
+  const Result r = run("frames " + data("tiny.toml") + " -o " + dir_.string() + " --times 0,abc");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("'abc' is not a time"), std::string::npos) << r.output;
+}
+
+}  // namespace

@@ -17,10 +17,14 @@ double segmentTriangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& 
   if (dp == 0.0) return -1.0;  // starts on the surface: moving away or along it, not a hit
   const double s = dp / (dp - dq);
   const Vec3 x = p + (q - p) * s;
-  // Inside test with edge functions (same sign as n for all three edges).
-  if (dot(cross(b - a, x - a), n) < 0.0) return -1.0;
-  if (dot(cross(c - b, x - b), n) < 0.0) return -1.0;
-  if (dot(cross(a - c, x - c), n) < 0.0) return -1.0;
+  // Inside test with edge functions (same sign as n for all three edges). Two triangles that
+  // share an edge compute that edge's function from different corners, so round-off can put
+  // a crossing exactly on the edge just outside both: a small tolerance (relative to |n|^2,
+  // i.e. 1e-9 of the triangle's size) closes the crack; a hit found in both is harmless.
+  const double tolerance = -1e-9 * dot(n, n);
+  if (dot(cross(b - a, x - a), n) < tolerance) return -1.0;
+  if (dot(cross(c - b, x - b), n) < tolerance) return -1.0;
+  if (dot(cross(a - c, x - c), n) < tolerance) return -1.0;
   normal = normalized(dp > 0.0 ? n : -n);
   return s;
 }
@@ -126,11 +130,12 @@ bool Colliders::firstHit(const Vec3& from, const Vec3& to, ContactHit& hit) cons
   return found;
 }
 
-Vec3 contactVelocity(const Vec3& velocity, const Vec3& n, const ContactMaterial& material, double restingSpeed) {
+Vec3 contactVelocity(const Vec3& velocity, const Vec3& n, const ContactMaterial& material, double restingSpeed,
+                     bool resting) {
   const double vn = dot(velocity, n);
   if (vn >= 0.0) return velocity;  // already separating
   const Vec3 vt = velocity - n * vn;
-  const double rebound = -vn > restingSpeed ? -material.restitution * vn : 0.0;
+  const double rebound = !resting && -vn > restingSpeed ? -material.restitution * vn : 0.0;
   const double normalImpulse = rebound - vn;  // per unit mass, > 0
   const double vtLen = length(vt);
   const double frictionImpulse = material.friction * normalImpulse;
@@ -138,7 +143,7 @@ Vec3 contactVelocity(const Vec3& velocity, const Vec3& n, const ContactMaterial&
   return vtAfter + n * rebound;
 }
 
-bool Colliders::resolve(const Vec3& from, Vec3& to, Vec3& velocity) const {
+bool Colliders::resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting) const {
   Vec3 start = from;
   bool touched = false;
   // A few rounds: hit, slide along the surface, possibly hit another collider.
@@ -147,7 +152,7 @@ bool Colliders::resolve(const Vec3& from, Vec3& to, Vec3& velocity) const {
     if (!firstHit(start, to, hit)) return touched;
     touched = true;
     const Vec3 before = velocity;
-    velocity = contactVelocity(velocity, hit.normal, hit.material, restingSpeed);
+    velocity = contactVelocity(velocity, hit.normal, hit.material, restingSpeed, resting || round > 0);
     // The rest of the path slides along the surface, slowed as the velocity was.
     Vec3 rest = to - hit.point;
     rest -= hit.normal * dot(rest, hit.normal);

@@ -9,9 +9,14 @@
 // and Coulomb friction along the surface (an impulse no larger than mu times the normal
 // impulse), and the rest of its path continues as sliding along the surface.
 //
-// Contact never adds energy: the normal speed after contact is at most the speed before
-// (restitution <= 1), friction only removes tangential speed, and impacts slower than
-// `restingSpeed` are perfectly inelastic, so a body resting on the ground does not jitter.
+// Contact never adds kinetic energy: the normal speed after contact is at most the speed
+// before (restitution <= 1) and friction only removes tangential speed. Restitution applies
+// to impacts only: a vertex that touched a collider within the last `restingWindow` seconds is
+// in sustained contact and its hits are perfectly inelastic, as are impacts slower than
+// `restingSpeed`. Without that, the springs pressing a resting body's lowest vertices into the
+// ground would make them bounce off and back every few steps, forever. (Putting a vertex back on the
+// surface moves it by less than one step's travel; the elastic energy of its springs changes
+// by that much, O(dt^2).)
 #pragma once
 
 #include <cstdint>
@@ -63,19 +68,23 @@ struct Colliders {
   std::vector<TriangleCollider> meshes;
   double restingSpeed = 0.1;  // impacts slower than this [m/s] do not bounce
   double skin = 1e-6;         // distance a vertex is kept off a surface [m]
+  double restingWindow = 0.02;  // contact within this time [s] counts as sustained (no bounce)
 
   bool empty() const { return planes.empty() && meshes.empty(); }
   // Earliest hit on the segment from `from` to `to` over all colliders; false if none.
   bool firstHit(const Vec3& from, const Vec3& to, ContactHit& hit) const;
   // Resolves one vertex's path: returns the corrected end position and updates `velocity`.
+  // `resting`: the vertex is in sustained contact (touched a collider within restingWindow).
   // Returns true if any contact happened.
-  bool resolve(const Vec3& from, Vec3& to, Vec3& velocity) const;
+  bool resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting) const;
   // Largest depth of a point behind any plane (0 when in front of all) [m].
   double planePenetration(const Vec3& p) const;
 };
 
 // Velocity after an impact with a surface of unit normal n (restitution along n, Coulomb
-// friction along the surface). `restingSpeed`: slower impacts are inelastic.
-Vec3 contactVelocity(const Vec3& velocity, const Vec3& n, const ContactMaterial& material, double restingSpeed);
+// friction along the surface). Slower impacts than `restingSpeed`, and any hit in resting
+// contact, are inelastic.
+Vec3 contactVelocity(const Vec3& velocity, const Vec3& n, const ContactMaterial& material, double restingSpeed,
+                     bool resting = false);
 
 }  // namespace springy

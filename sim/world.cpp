@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 
 #include "sim/forces.h"
 #include "sim/hinge.h"
@@ -78,6 +79,8 @@ World::World(Model model, Integrator integrator, double dt)
   x_ = model_.restPosition;
   v_ = model_.initialVelocity;
   for (auto* buffer : {&xOld_, &a_, &forceScratch_}) buffer->assign(n, Vec3{});
+  if (!model_.colliders.empty()) sinceContact_.assign(n, 0xFFFF);
+  restingSteps_ = static_cast<int>(std::ceil(model_.colliders.restingWindow / dt_));
   if (integrator_ == Integrator::RK4) {
     for (auto* buffer : {&k1x_, &k1v_, &k2x_, &k2v_, &k3x_, &k3v_, &k4v_, &xs_, &vs_}) buffer->assign(n, Vec3{});
   }
@@ -91,6 +94,7 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
   v_ = std::move(v);
   time_ = time;
   cachedAccelerationValid_ = false;
+  std::fill(sinceContact_.begin(), sinceContact_.end(), 0xFFFF);
 }
 
 void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const {
@@ -198,7 +202,9 @@ void World::collide() {
   const std::size_t n = model_.vertexCount();
   for (std::size_t i = 0; i < n; ++i) {
     if (model_.invMass[i] == 0.0) continue;  // pinned
-    if (colliders.resolve(xOld_[i], x_[i], v_[i])) touched = true;
+    const bool hit = colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
+    sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
+    touched = touched || hit;
   }
   if (touched) cachedAccelerationValid_ = false;
 }

@@ -76,6 +76,8 @@ class World {
   // Scratch, sized once.
   std::vector<Vec3> xOld_, a_, k1x_, k1v_, k2x_, k2v_, k3x_, k3v_, k4v_, xs_, vs_, aNext_;
   mutable std::vector<Vec3> forceScratch_;
+  std::vector<uint16_t> sinceContact_;  // steps since each vertex last touched a collider
+  int restingSteps_ = 0;                // contact within this many steps is resting contact
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
 };
 

@@ -496,5 +496,73 @@ TEST(Bvh, SameHitsAsBruteForceOnA50x50Grid) {
   EXPECT_GT(misses, 600);
 }
 
+// Paths through the diagonal the two triangles of a quad share: the plate has no crack there.
+TEST(Plate, NoCrackAlongTheSharedDiagonal) {
+  for (double degrees : {0.0, 35.0, 61.0}) {
+    const Plate plate = tiltedPlate(degrees);
+    Colliders colliders;
+    colliders.meshes.push_back(plate.collider({}));
+    const TriMesh& m = colliders.meshes[0].mesh;
+    Random random(11);
+    for (int k = 0; k < 20000; ++k) {
+      const double s = random.uniform(0.001, 0.999);
+      const Vec3 onDiagonal = m.positions[0] + (m.positions[2] - m.positions[0]) * s;
+      const Vec3 dir = normalized(plate.normal + plate.u * random.uniform(-1, 1) + plate.w * random.uniform(-1, 1));
+      const double len = random.uniform(0.01, 10.0);
+      for (double sign : {1.0, -1.0}) {
+        ContactHit hit;
+        const Vec3 from = onDiagonal + dir * (sign * len), to = onDiagonal - dir * (sign * 0.37 * len);
+        ASSERT_TRUE(colliders.firstHit(from, to, hit)) << degrees << " deg, case " << k << " sign " << sign;
+        EXPECT_GT(dot(hit.normal, from - onDiagonal), 0.0);  // faces the side the path came from
+      }
+    }
+  }
+}
+
+
+// On a bouncy floor (restitution 0.6) the ball still comes to rest: the vertices its springs press
+// into the ground are in resting contact and do not bounce every other step.
+TEST(Resting, SoftBallDroppedOnTheGroundComesToRestWithoutGainingEnergy) {
+  for (Integrator integrator : {Integrator::SymplecticEuler, Integrator::RK4}) {
+    Model model;
+    model.gravity = {0, -kG, 0};
+    BodyDesc desc;
+    desc.name = "ball";
+    desc.mesh = makeIcosphere(1.0, 2);
+    for (Vec3& p : desc.mesh.positions) p.y += 1.3;  // 0.3 m above the ground
+    desc.mass = 1.0;
+    desc.strutPeriod = 0.05;
+    desc.strutDecay = 0.03;
+    desc.hingePeriod = 0.3;
+    desc.hingeDecay = 1.0;
+    addBody(model, desc);
+    const double dt = 1e-3;
+    model.colliders.planes.push_back({{0, 0, 0}, {0, 1, 0}, {0.6, 0.3}});
+    model.colliders.restingSpeed = 4 * kG * dt;
+    World world(std::move(model), integrator, dt);
+    const double e0 = measureBody(world, 0).total();
+    ASSERT_NEAR(e0, kG * 1.3, 1e-9);
+    double highest = e0;
+    bool touched = false;
+    for (int s = 0; s < 18000; ++s) {
+      world.step();
+      const BodyMeasures m = measureBody(world, 0);
+      ASSERT_TRUE(m.finite);
+      ASSERT_EQ(m.penetration, 0.0) << integratorName(integrator) << " step " << s;
+      highest = std::max(highest, m.total());
+      for (const Vec3& x : world.positions()) touched = touched || x.y < 1e-3;
+    }
+    EXPECT_TRUE(touched);
+    EXPECT_LE(highest, e0 * (1 + 1e-12)) << integratorName(integrator);
+    const BodyMeasures end = measureBody(world, 0);
+    EXPECT_LT(end.rmsSpeed, 2e-3) << integratorName(integrator);
+    EXPECT_LT(end.total(), 0.9 * e0) << integratorName(integrator);  // it lies on the ground
+    // It lies on the ground, squashed by its weight (a soft ball: the centroid sags below r).
+    EXPECT_GT(end.centroid.y, 0.6) << integratorName(integrator);
+    EXPECT_LT(end.centroid.y, 1.0) << integratorName(integrator);
+  }
+}
+
+
 }  // namespace
 }  // namespace springy

@@ -4,7 +4,8 @@
 
 namespace springy {
 
-bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g) {
+bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g, double minLeverLeft,
+                   double minLeverRight) {
   const Vec3 e = x1 - x0;
   const double l01 = length(e);
   if (!(l01 > 0.0)) return false;
@@ -20,8 +21,8 @@ bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x
   const Vec3 nl = cross(h, rl) / lenL;
   const Vec3 nr = cross(rr, h) / lenR;
   g.theta = std::atan2(dot(cross(nl, nr), h), dot(nl, nr));
-  g.grad[2] = nl * (-1.0 / lenL);
-  g.grad[3] = nr * (-1.0 / lenR);
+  g.grad[2] = nl * (-1.0 / std::fmax(lenL, minLeverLeft));
+  g.grad[3] = nr * (-1.0 / std::fmax(lenR, minLeverRight));
   g.grad[1] = (g.grad[2] * d02 + g.grad[3] * d03) * (-1.0 / l01);
   g.grad[0] = -(g.grad[1] + g.grad[2] + g.grad[3]);
   g.leverLeft = lenL;
@@ -45,7 +46,7 @@ void applyHinges(const Hinge* hinges, std::size_t begin, std::size_t end, const 
   HingeGeometry g;
   for (std::size_t k = begin; k < end; ++k) {
     const Hinge& hg = hinges[k];
-    if (!hingeGeometry(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]], g)) continue;
+    if (!hingeGeometry(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]], g, hg.minLever[0], hg.minLever[1])) continue;
     double rate = 0.0;  // d theta / dt
     for (int i = 0; i < 4; ++i) rate += dot(g.grad[i], v[hg.v[i]]);
     const double torque = hg.stiffness * angleDifference(g.theta, hg.restAngle) + hg.damping * rate;

@@ -14,6 +14,13 @@
 // the wing vertices' absolute normal velocities, which damps plain translation.)
 // The forces sum to zero and have zero net torque because g is the gradient of a function
 // invariant under rigid motion.
+//
+// Guard for collapsing faces: the exact gradient grows as 1/|r| when a wing vertex nears the
+// hinge line, which happens only when a violent impact crushes a triangle (its struts
+// compressed by tens of percent). There the force would be unbounded and any time step too
+// coarse. springy bounds the lever arm the force divides by at a fifth of its rest value
+// (Hinge::minLever): in every ordinary configuration the forces are the exact gradient
+// (tested by finite differences); in a crushed face they stay finite and still restoring.
 #pragma once
 
 #include <cstddef>
@@ -30,7 +37,10 @@ struct HingeGeometry {
 
 // Computes the angle and its gradient. Returns false (and leaves g unset) when the geometry
 // is degenerate: a zero-length hinge edge or a wing vertex on the hinge line.
-bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g);
+// minLeverLeft/Right bound the lever arms the gradient divides by (see Hinge::minLever): below
+// them the "gradient" is the exact one scaled down, so forces stay finite in collapsing faces.
+bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g,
+                   double minLeverLeft = 0.0, double minLeverRight = 0.0);
 
 // Signed dihedral angle alone (the same convention as hingeGeometry).
 double dihedralAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3);

@@ -158,6 +158,8 @@ void addBody(Model& model, const BodyDesc& desc) {
                     ") has a wing vertex on the hinge line (a sliver face): it has no lever arm");
       }
       h.restAngle = g.theta;
+      h.minLever[0] = 0.2 * g.leverLeft;
+      h.minLever[1] = 0.2 * g.leverRight;
       const double mean = 0.5 * (m[e.from] + m[e.to]);
       const double r = 0.5 * (g.leverLeft + g.leverRight);  // at rest, once
       h.stiffness = desc.hingeStiffness ? *desc.hingeStiffness : torsionStiffnessFromPeriod(mean, r, desc.hingePeriod);

@@ -180,3 +180,37 @@ TEST(Hinge, RigidMotionGivesNoForceEvenWithDamping) {
 
 }  // namespace
 }  // namespace springy
+
+namespace springy {
+namespace {
+
+TEST(Hinge, CrushedFaceGivesFiniteRestoringForce) {
+  // A wing vertex pushed almost onto the hinge line: the exact gradient would be ~1/|r|; the
+  // guard bounds the lever arm at a fifth of the rest value, so the force stays finite and
+  // still points the way that restores the angle.
+  const std::vector<Vec3> rest = test::hingePositions(0.6);
+  HingeGeometry g0;
+  ASSERT_TRUE(hingeGeometry(rest[0], rest[1], rest[2], rest[3], g0));
+  Hinge h{{0, 1, 2, 3}, g0.theta, 3.0, 0.0, {0.2 * g0.leverLeft, 0.2 * g0.leverRight}};
+  std::vector<Vec3> x = rest;
+  x[2] = Vec3{0.4, 1e-9, -1e-9};  // |r_l| = 1.4e-9
+  std::vector<Vec3> v(4), f(4);
+  applyHinges(&h, 0, 1, x.data(), v.data(), f.data());
+  HingeGeometry g;
+  ASSERT_TRUE(hingeGeometry(x[0], x[1], x[2], x[3], g));
+  const double torque = h.stiffness * std::fabs(angleDifference(g.theta, h.restAngle));
+  for (const Vec3& fi : f) ASSERT_TRUE(isFinite(fi));
+  EXPECT_LE(length(f[2]), torque / h.minLever[0] * (1 + 1e-12));
+  EXPECT_GT(length(f[2]), 0.5 * torque / h.minLever[0]);
+  // Restoring: moving the wing along its force brings the angle toward rest.
+  std::vector<Vec3> moved = x;
+  moved[2] += f[2] * (1e-3 * g.leverLeft / length(f[2]));  // a small step next to the line
+  EXPECT_LT(std::fabs(angleDifference(dihedralAngle(moved[0], moved[1], moved[2], moved[3]), h.restAngle)),
+            std::fabs(angleDifference(g.theta, h.restAngle)));
+  Vec3 sum;
+  for (const Vec3& fi : f) sum += fi;
+  EXPECT_LT(length(sum), 1e-9 * length(f[2]));
+}
+
+}  // namespace
+}  // namespace springy

@@ -6,6 +6,7 @@
 
 #include "sim/forces.h"
 #include "sim/hinge.h"
+#include "sim/implicit.h"
 #include "sim/strut.h"
 
 namespace springy {
@@ -19,6 +20,7 @@ constexpr IntegratorEntry kIntegrators[] = {
     {Integrator::ExplicitEuler, "explicit_euler"}, {Integrator::SymplecticEuler, "symplectic_euler"},
     {Integrator::VelocityVerlet, "verlet"},        {Integrator::Leapfrog, "leapfrog"},
     {Integrator::RK4, "rk4"},
+    {Integrator::BackwardEuler, "backward_euler"},
 };
 
 // y = a + s b over a whole array.
@@ -86,7 +88,12 @@ World::World(Model model, Integrator integrator, double dt)
   }
   if (integrator_ == Integrator::VelocityVerlet || integrator_ == Integrator::Leapfrog) vs_.assign(n, Vec3{});
   if (integrator_ == Integrator::VelocityVerlet) aNext_.assign(n, Vec3{});
+  if (integrator_ == Integrator::BackwardEuler) implicit_ = std::make_unique<ImplicitSolver>(model_);
 }
+
+World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
 
 void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
   assert(x.size() == model_.vertexCount() && v.size() == model_.vertexCount());
@@ -190,6 +197,9 @@ void World::step() {
       }
       break;
     }
+    case Integrator::BackwardEuler:
+      implicit_->step(*this, x_, v_, t, dt);
+      break;
   }
   time_ = t + dt;
   ++steps_;

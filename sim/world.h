@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -27,6 +28,7 @@ enum class Integrator {
   VelocityVerlet,   // x += dt v + dt^2/2 a, v += dt/2 (a + a_new)           order 2, 1 eval/step
   Leapfrog,         // kick dt/2, drift dt, kick dt/2 (forces at both ends)  order 2, 2 evals/step
   RK4,              // classical Runge-Kutta, forces at all four stages      order 4
+  BackwardEuler,    // implicit: Newton + CG on M dv = h f(x + h v1, v1)     order 1 (sim/implicit.h)
 };
 
 // Name used in scene files and on the command line ("explicit_euler", "rk4", ...).
@@ -39,9 +41,14 @@ std::string integratorNames();
 enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges };
 std::string_view forceStageName(ForceStage stage);
 
+class ImplicitSolver;
+
 class World {
  public:
   World(Model model, Integrator integrator, double dt);
+  ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
 
   // Advances the state by one step of dt.
   void step();
@@ -58,6 +65,8 @@ class World {
   const std::vector<Vec3>& velocities() const { return v_; }
   const std::vector<ForceStage>& forceStages() const { return forceStages_; }
   bool collides() const { return !model_.colliders.empty(); }
+  // The backward Euler solver (its statistics), or null for the explicit integrators.
+  const ImplicitSolver* implicitSolver() const { return implicit_.get(); }
 
   // Replaces the state (e.g. a test's initial condition). Sizes must match the model.
   void setState(std::vector<Vec3> x, std::vector<Vec3> v, double time = 0.0);
@@ -79,6 +88,7 @@ class World {
   std::vector<uint16_t> sinceContact_;  // steps since each vertex last touched a collider
   int restingSteps_ = 0;                // contact within this many steps is resting contact
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
+  std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
 };
 
 }  // namespace springy

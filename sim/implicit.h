@@ -1,0 +1,117 @@
+// springy: the implicit integrator, backward Euler with Newton iterations and conjugate
+// gradients over the analytic Jacobians of the strut and hinge forces (Baraff & Witkin 1998,
+// "Large steps in cloth simulation").
+//
+// One step solves for the end-of-step velocity v1
+//   R(v1) = M (v1 - v0) - h f(x0 + h v1, v1, t + h) = 0,        x1 = x0 + h v1
+// by Newton's method: (M - h D - h^2 K) dv = -R with K = df/dx, D = df/dv at the current
+// iterate. The first iteration from v1 = v0 is exactly Baraff & Witkin's linearised step;
+// further iterations converge to the backward Euler solution. The linear system is solved by
+// preconditioned conjugate gradients (Jacobi preconditioner) on a sparse matrix whose pattern
+// (one 3x3 block per vertex pair that shares a strut or a hinge) is built once; pinned
+// vertices (invMass 0) are held by filtering their rows in CG (Baraff & Witkin section 5.3).
+//
+// CG needs a symmetric positive definite matrix, and the exact K is neither (a compressed
+// strut's transverse stiffness k (1 - l0/l) is negative; the hinge's k (theta - theta0) times
+// the Hessian of theta is indefinite; the dampers' position terms are not symmetric). The
+// solver therefore iterates with the definite part: strut k u u^T + k max(0, 1 - l0/l) (I - u u^T)
+// (Choi & Ko 2002), hinge k g g^T (Gauss-Newton) and the exact damping Jacobians D. Newton's
+// fixed point, the backward Euler step, does not depend on that choice; only the convergence
+// rate does. The exact Jacobians are here too (strutJacobian, hingeJacobian with
+// definite = false) and are checked against finite differences by the tests.
+//
+// Hinge Jacobian: with g_i = d theta / d x_i as in hinge.h, written g2 = G(h, x2 - x0),
+// g3 = -G(h, x3 - x0) with G(h, a) = -(h x a) / (|a|^2 - (a.h)^2), g1 = -((x02.h) g2 +
+// (x03.h) g3) / l and g0 = -(g1 + g2 + g3), the Hessian of theta follows by the chain rule
+// through h = (x1 - x0) / l. It is an independent derivation of the same quantity as
+// Tamstorf & Grinspun 2013, "Discrete bending forces and their Jacobians" (their eq. for the
+// Hessian of the dihedral angle), in the form that matches springy's gradient.
+//
+// Collisions are not part of the solve: World runs its collide stage after this step as it
+// does after every explicit integrator. No allocation inside a step: every buffer and the
+// matrix pattern are sized in the constructor.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <Eigen/SparseCore>
+#include <cstdint>
+#include <vector>
+
+#include "sim/model.h"
+
+namespace springy {
+
+class World;
+
+using Matrix12 = Eigen::Matrix<double, 12, 12>;
+
+// Jacobian blocks of one strut: dfdx = d f_i / d x_j (then d f_i/d x_i = d f_j/d x_j = -dfdx,
+// d f_j / d x_i = dfdx), and likewise dfdv. definite: the positive semidefinite part used by
+// the solver (see above). Returns false when the two ends coincide (no direction).
+bool strutJacobian(const Strut& strut, const Vec3* x, const Vec3* v, Eigen::Matrix3d& dfdx, Eigen::Matrix3d& dfdv,
+                   bool definite);
+
+// Hessian of the dihedral angle, H(3i + a, 3j + b) = d^2 theta / d x_i,a d x_j,b for the four
+// hinge vertices in hinge order. Returns false for degenerate geometry.
+bool dihedralHessian(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, Matrix12& hessian);
+
+// Jacobians of one hinge's forces on its four vertices: dfdx(3i + a, 3j + b) = d f_i,a / d x_j,b,
+// and d f / d v. definite: -k g g^T for dfdx (Gauss-Newton), else exact. Returns false for
+// degenerate geometry.
+bool hingeJacobian(const Hinge& hinge, const Vec3* x, const Vec3* v, Matrix12& dfdx, Matrix12& dfdv, bool definite);
+
+struct ImplicitSettings {
+  int maxNewton = 10;           // Newton iterations per step
+  double newtonTolerance = 1e-9;  // stop when max |dv| <= tol * (max |v| + vScale)
+  int maxCg = 1000;             // CG iterations per Newton iteration
+  double cgTolerance = 1e-10;   // relative residual of the preconditioned CG
+};
+
+struct ImplicitStats {
+  uint64_t steps = 0;
+  uint64_t newtonIterations = 0;
+  uint64_t cgIterations = 0;
+  uint64_t unconvergedSteps = 0;  // Newton stopped at maxNewton
+};
+
+class ImplicitSolver {
+ public:
+  explicit ImplicitSolver(const Model& model, ImplicitSettings settings = {});
+
+  // Advances x, v (the World's state) by dt. Returns false if Newton did not converge within
+  // maxNewton iterations (the last iterate is kept; a non-finite state is left for the
+  // stability monitor to report).
+  bool step(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
+
+  // Assembles K = df/dx and D = df/dv over all struts, hinges and drag at (x, v).
+  void assemble(const Model& model, const Vec3* x, const Vec3* v, bool definite);
+  const Eigen::SparseMatrix<double>& stiffness() const { return K_; }
+  const Eigen::SparseMatrix<double>& dampingMatrix() const { return D_; }
+  const ImplicitStats& stats() const { return stats_; }
+
+ private:
+  // Value index of entry (3a, 3b + c) in the compressed pattern, c = 0..2.
+  struct Block {
+    int index[3];
+  };
+  Block findBlock(uint32_t a, uint32_t b) const;
+  static void addBlock(Eigen::SparseMatrix<double>& m, const Block& blk, const Eigen::Matrix3d& values, double scale);
+  // Evaluates rhs_ = -R(v) (filtered) for the step from x0; returns |R|.
+  double residual(const World& world, const std::vector<Vec3>& x0, const std::vector<Vec3>& v, double t, double dt);
+  // Solves A dv = rhs_ by filtered Jacobi-preconditioned CG; returns the iteration count.
+  int solveCg(double absoluteFloor);
+
+  ImplicitSettings settings_;
+  ImplicitStats stats_;
+  std::size_t n_;
+  Eigen::SparseMatrix<double> K_, D_, A_;
+  std::vector<Block> diagonal_;  // per vertex
+  std::vector<Block> strutBlocks_;  // per strut: (i, j), (j, i)
+  std::vector<Block> hingeBlocks_;  // per hinge: 16 blocks (a, b) row-major
+  // Workspace.
+  std::vector<Vec3> x1_, f_, v0_, vTrial_;
+  Eigen::VectorXd rhs_, dv_, r_, z_, p_, q_, precond_, filter_;
+};
+
+}  // namespace springy

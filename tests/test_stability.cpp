@@ -1,0 +1,117 @@
+// The stability advisor: its prediction against measured limits, the textbook bounds of the
+// scalar test mode, and the guarantee that no stiff or extreme case yields a silent NaN.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fixtures.h"
+#include "sim/error.h"
+#include "sim/stability.h"
+
+namespace springy {
+namespace {
+
+constexpr Integrator kExplicit[] = {Integrator::ExplicitEuler, Integrator::SymplecticEuler,
+                                    Integrator::VelocityVerlet, Integrator::Leapfrog, Integrator::RK4};
+
+TEST(Amplification, TextbookLimitsOfTheUndampedMode) {
+  const double w = 100.0, horizon = 1.0;
+  // (Slightly above the sharp limits: a growth of the energy by 2 over the horizon is allowed.)
+  EXPECT_NEAR(criticalStep(Integrator::SymplecticEuler, w, 0.0, horizon) * w, 2.0, 1e-4);
+  EXPECT_NEAR(criticalStep(Integrator::VelocityVerlet, w, 0.0, horizon) * w, 2.0, 1e-4);
+  EXPECT_NEAR(criticalStep(Integrator::Leapfrog, w, 0.0, horizon) * w, 2.0, 1e-4);
+  EXPECT_NEAR(criticalStep(Integrator::RK4, w, 0.0, horizon) * w, 2.0 * std::sqrt(2.0), 5e-3);  // 2.83
+  // Explicit Euler amplifies every undamped mode by sqrt(1 + w^2 h^2) per step.
+  EXPECT_NEAR(amplification(Integrator::ExplicitEuler, w, 0.0, 1e-3), std::sqrt(1.0 + 0.01), 1e-12);
+  EXPECT_TRUE(std::isinf(criticalStep(Integrator::BackwardEuler, w, 50.0, horizon)));
+  // Pure damping: explicit Euler needs h < 2 / gamma.
+  EXPECT_NEAR(criticalStep(Integrator::ExplicitEuler, 0.0, 1000.0, horizon) * 1000.0, 2.0, 1e-3);
+}
+
+TEST(Advisor, GershgorinIsExactForTwoMassesOnAStrut) {
+  // Relative coordinate: omega^2 = k (1/m0 + 1/m1) for equal masses 2 k / m.
+  const double k = 1000.0, d = 4.0;
+  const Model model = test::strutModel(2.0, 2.0, 1.0, k, d, false);
+  const StabilityReport r = estimateStability(model, model.restPosition, Integrator::RK4, 1.0);
+  EXPECT_NEAR(r.bodies[0].omegaMax, std::sqrt(2 * k / 2.0), 1e-9);
+  EXPECT_NEAR(r.bodies[0].gammaMax, 2 * d / 2.0, 1e-12);
+}
+
+// The prediction must lie within a factor of 2 of the measured limit (strut and hinge cases).
+class PredictionVsMeasurement : public ::testing::TestWithParam<std::tuple<int, Integrator>> {};
+
+TEST_P(PredictionVsMeasurement, WithinAFactorOfTwo) {
+  const auto [which, integrator] = GetParam();
+  const StabilityCase c = which == 0 ? strutCase(0.01, 0.05) : which == 1 ? strutCase(0.01, 0.0)
+                                      : which == 2 ? hingeCase(0.01, 0.05) : hingeCase(0.01, 0.0);
+  const double horizon = 0.2;
+  const StabilityReport predicted = estimateStability(c.model, c.positions, integrator, horizon);
+  const MeasuredStep measured = largestStableStep(c.model, integrator, horizon, predicted.dtMax, 0.1, &c.positions, 6);
+  ASSERT_FALSE(measured.capped);
+  const double ratio = predicted.dtMax / measured.dt;
+  EXPECT_GT(ratio, 0.5) << c.name << " " << integratorName(integrator) << ": predicted " << predicted.dtMax
+                        << " measured " << measured.dt;
+  EXPECT_LT(ratio, 2.0) << c.name << " " << integratorName(integrator) << ": predicted " << predicted.dtMax
+                        << " measured " << measured.dt;
+}
+
+INSTANTIATE_TEST_SUITE_P(StrutAndHinge, PredictionVsMeasurement,
+                         ::testing::Combine(::testing::Values(0, 1, 2, 3), ::testing::ValuesIn(kExplicit)));
+
+TEST(Advisor, SafeSubstepsBringTheStepUnderTheLimit) {
+  EXPECT_EQ(safeSubsteps(0.01, 0.02), 1);
+  EXPECT_EQ(safeSubsteps(0.01, 0.001, 1.0), 10);
+  EXPECT_EQ(safeSubsteps(0.01, 0.001, 0.9), 12);
+  EXPECT_EQ(safeSubsteps(0.01, std::numeric_limits<double>::infinity()), 1);
+}
+
+// The guarantee: every stiff or extreme case either runs, or stops with a report naming the
+// body, step and what diverged, or is refused at load. Never a silent NaN.
+TEST(Guarantee, NoCaseEverProducesASilentNaN) {
+  for (const CaseFactory& factory : stabilityCases()) {
+    StabilityCase c;
+    try {
+      c = factory.make();
+    } catch (const Error& e) {
+      // Refused at load: only degenerate geometry is, and the message says which element.
+      EXPECT_TRUE(factory.degenerate) << factory.name << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find("body '"), std::string::npos) << e.what();
+      continue;
+    }
+    EXPECT_FALSE(factory.degenerate) << factory.name << " was not refused at load";
+    for (Integrator integrator : {Integrator::ExplicitEuler, Integrator::SymplecticEuler, Integrator::VelocityVerlet,
+                                  Integrator::Leapfrog, Integrator::RK4, Integrator::BackwardEuler}) {
+      // A step far too coarse for the explicit methods, one at the real-time rate, one fine.
+      for (double dt : {1.0 / 60, 1e-3}) {
+        const RunOutcome r = runMonitored(c.model, integrator, dt, 0.1, &c.positions);
+        if (!r.finiteAtEnd) {
+          EXPECT_FALSE(r.stable) << c.name << " " << integratorName(integrator) << " dt " << dt << ": silent NaN";
+        }
+        if (!r.stable) {
+          EXPECT_NE(r.failure.find("body '"), std::string::npos) << r.failure;
+          EXPECT_NE(r.failure.find("at step "), std::string::npos) << r.failure;
+          EXPECT_FALSE(r.kind.empty());
+        }
+      }
+    }
+  }
+}
+
+TEST(Guarantee, ImplicitIsStableAtOneSixtiethWhereExplicitNeedsStepsAHundredTimesSmaller) {
+  // Backward Euler runs every case at 1/60 s (not only the stiff ones).
+  for (const CaseFactory& factory : stabilityCases()) {
+    if (factory.degenerate) continue;
+    const StabilityCase c = factory.make();
+    const RunOutcome implicit = runMonitored(c.model, Integrator::BackwardEuler, 1.0 / 60, 0.5, &c.positions);
+    EXPECT_TRUE(implicit.stable) << c.name << ": " << implicit.failure;
+    if (!factory.stiff) continue;
+    // Every explicit integrator fails at a step 100 times smaller than 1/60 s.
+    for (Integrator integrator : kExplicit) {
+      const RunOutcome r = runMonitored(c.model, integrator, 1.0 / 6000, 0.05, &c.positions);
+      EXPECT_FALSE(r.stable) << c.name << " " << integratorName(integrator) << " is stable at 1/6000 s";
+    }
+  }
+}
+
+}  // namespace
+}  // namespace springy

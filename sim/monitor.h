@@ -35,6 +35,11 @@ struct BodyRecord {
   double minVolumeRatio = 1.0, maxVolumeRatio = 1.0;
 };
 
+// A body is at rest when its vertices' RMS speed is below 0.2% of its rest size per second
+// (e.g. 0.04 m/s for the 20 m diagonal of a radius-6 ball): still enough that no motion shows
+// in a video frame.
+inline bool atRest(const BodyMeasures& m, const BodyInfo& info) { return m.rmsSpeed < 2e-3 * info.restSize; }
+
 class Monitor {
  public:
   Monitor(const World& world, MonitorLimits limits = {});

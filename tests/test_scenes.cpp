@@ -1,0 +1,156 @@
+// The showcase scenes: each tells a story, and this file checks it happens. Scenes are run
+// from their files exactly as `springy check` and `springy render` load them.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <functional>
+#include <cmath>
+#include <limits>
+
+#include "sim/diagnostics.h"
+#include "sim/monitor.h"
+#include "sim/scene.h"
+
+namespace springy {
+namespace {
+
+std::string scenePath(const std::string& name) { return std::string(SPRINGY_SOURCE_DIR) + "/scenes/" + name + ".toml"; }
+
+struct SceneRun {
+  SceneDesc scene;
+  World world;
+  Monitor monitor;
+  explicit SceneRun(const std::string& name)
+      : scene(loadScene(scenePath(name))), world(buildModel(scene), scene.integrator, stepSize(scene)), monitor(world) {}
+  // Advances to time t, checking stability at every frame (1/30 s); fails the test on a failure.
+  void advance(double t, const std::function<void()>& perFrame = {}) {
+    while (world.time() < t - 0.5 * world.dt()) {
+      const double frameEnd = std::min(t, world.time() + 1.0 / 30.0);
+      while (world.time() < frameEnd - 0.5 * world.dt()) world.step();
+      const std::optional<Failure> failure = monitor.check(world);
+      ASSERT_FALSE(failure) << failure->message;
+      if (perFrame) perFrame();
+    }
+  }
+  BodyMeasures body(uint32_t b) const { return measureBody(world, b); }
+  double height(uint32_t b) const {  // vertical extent of a body
+    const BodyInfo& info = world.model().bodies[b];
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      lo = std::min(lo, world.positions()[i].y);
+      hi = std::max(hi, world.positions()[i].y);
+    }
+    return hi - lo;
+  }
+  double lowest(uint32_t b) const {
+    const BodyInfo& info = world.model().bodies[b];
+    double lo = std::numeric_limits<double>::infinity();
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) lo = std::min(lo, world.positions()[i].y);
+    return lo;
+  }
+};
+
+TEST(Scenes, SingleSphereBouncesThenRestsOnTheGroundKeepingItsVolume) {
+  SceneRun run("single_sphere");
+  const double radius = 6.0;
+  run.advance(25.0);  // with the original's light hinge damping it needs about 20 s to settle
+  const BodyRecord& r = run.monitor.records()[0];
+  const BodyMeasures m = run.body(0);
+  EXPECT_GT(r.minVolumeRatio, 0.8);                    // squashed on impact, not crushed
+  EXPECT_GT(m.volume / run.world.model().bodies[0].restVolume, 0.95);  // and back
+  EXPECT_TRUE(atRest(m, run.world.model().bodies[0])) << m.rmsSpeed;
+  EXPECT_NEAR(run.lowest(0), 0.0, 1e-3);               // on the ground
+  EXPECT_GT(m.centroid.y, 0.75 * radius);              // sagging a little under its weight
+  EXPECT_LT(m.centroid.y, radius);
+}
+
+TEST(Scenes, ThreeSpheresSquashAndBounceByDifferentAmounts) {
+  SceneRun run("spheres");
+  std::array<double, 3> bounce{0, 0, 0};  // highest centroid after the first impact
+  std::array<bool, 3> landed{false, false, false};
+  run.advance(5.0, [&] {
+    for (uint32_t b = 0; b < 3; ++b) {
+      landed[b] = landed[b] || run.lowest(b) < 0.01;
+      if (landed[b]) bounce[b] = std::max(bounce[b], run.body(b).centroid.y);
+    }
+  });
+  // Volume lost at the deepest squash: the soft ball (P_theta 0.8 s) gives most, the firm one
+  // (P_theta 0.34 s, T_theta 0.5 s) least; and the firmer the ball, the higher it bounces.
+  const auto& r = run.monitor.records();
+  EXPECT_LT(r[0].minVolumeRatio, r[1].minVolumeRatio - 0.02);
+  EXPECT_LT(r[1].minVolumeRatio, r[2].minVolumeRatio - 0.03);
+  EXPECT_LT(bounce[0], bounce[1] - 1.0);
+  EXPECT_LT(bounce[1], bounce[2] - 1.0);
+}
+
+TEST(Scenes, HangingSphereKeepsItsPolePinnedAndSettlesBelowRest) {
+  SceneRun run("fixed_single_sphere");
+  const Vec3 pole = run.world.positions()[0];
+  EXPECT_EQ(pole, (Vec3{0.0, 22.0, 0.0}));
+  run.advance(10.0);
+  EXPECT_EQ(run.world.positions()[0], pole);  // exactly: a pinned vertex never moves
+  const BodyMeasures m = run.body(0);
+  EXPECT_LT(m.centroid.y, 16.0 - 0.5);  // stretched under its own weight
+  EXPECT_GT(m.centroid.y, 10.0);
+  EXPECT_GT(m.volume / run.world.model().bodies[0].restVolume, 0.95);
+}
+
+TEST(Scenes, RampBallTouchesThePlatesInTurnAndEndsOnTheGround) {
+  SceneRun run("ramp");
+  const TriangleCollider& plates = run.world.model().colliders.meshes.at(0);
+  ASSERT_EQ(plates.mesh.triangles.size(), 8u);  // four quads
+  // Distance from a point to plate k (two triangles 2k, 2k+1), via its plane and extent.
+  auto nearPlate = [&](const Vec3& p, int k) {
+    const Triangle& t = plates.mesh.triangles[static_cast<std::size_t>(2 * k)];
+    const Vec3 a = plates.mesh.positions[t[0]], b = plates.mesh.positions[t[1]], c = plates.mesh.positions[t[2]];
+    const Vec3 n = normalized(cross(b - a, c - a));
+    const double lo = std::min(a.x, b.x), hi = std::max(a.x, b.x);
+    return std::fabs(dot(p - a, n)) < 0.05 && p.x >= lo && p.x <= hi;
+  };
+  std::array<double, 4> firstTouch{-1, -1, -1, -1};
+  double landed = -1;
+  run.advance(16.0, [&] {
+    for (const Vec3& p : run.world.positions()) {
+      for (int k = 0; k < 4; ++k) {
+        if (firstTouch[static_cast<std::size_t>(k)] < 0 && nearPlate(p, k)) firstTouch[static_cast<std::size_t>(k)] = run.world.time();
+      }
+      if (landed < 0 && p.y < -40.0 + 0.05) landed = run.world.time();
+    }
+  });
+  for (int k = 0; k < 4; ++k) EXPECT_GE(firstTouch[static_cast<std::size_t>(k)], 0.0) << "plate " << k << " never touched";
+  for (int k = 0; k < 3; ++k) EXPECT_LT(firstTouch[static_cast<std::size_t>(k)], firstTouch[static_cast<std::size_t>(k + 1)]);
+  EXPECT_GT(landed, firstTouch[3]);
+  EXPECT_NEAR(run.lowest(0), -40.0, 0.05);  // on the ground at the end
+  EXPECT_LT(std::fabs(run.body(0).centroid.x), 30.0);  // still in the camera's view
+}
+
+TEST(Scenes, LegacyCubeKeepsItsVolume) {
+  SceneRun run("cube");
+  ASSERT_EQ(run.world.model().struts.size(), 28u);
+  ASSERT_TRUE(run.world.model().hinges.empty());
+  run.advance(10.0);
+  const BodyRecord& r = run.monitor.records()[0];
+  EXPECT_GT(r.minVolumeRatio, 0.85);
+  EXPECT_LT(r.maxVolumeRatio, 1.15);
+  EXPECT_NEAR(run.body(0).volume / run.world.model().bodies[0].restVolume, 1.0, 0.02);
+  EXPECT_LT(run.lowest(0), 0.05);  // on the ground (it may still rock on an edge: e = 1)
+}
+
+TEST(Scenes, JellyWobblesAndRecoversItsShape) {
+  SceneRun run("jelly");
+  run.advance(10.0);
+  const BodyRecord& r = run.monitor.records()[0];
+  EXPECT_GT(r.minVolumeRatio, 0.85);
+  EXPECT_GT(run.body(0).volume / run.world.model().bodies[0].restVolume, 0.95);
+  EXPECT_TRUE(atRest(run.body(0), run.world.model().bodies[0])) << run.body(0).rmsSpeed;
+}
+
+TEST(Scenes, LightBunnyStaysStableAndKeepsItsShape) {
+  SceneRun run("bunny_light");
+  EXPECT_EQ(run.world.model().bodies[0].vertexCount, 500u);
+  run.advance(4.0);
+  EXPECT_GT(run.body(0).volume / run.world.model().bodies[0].restVolume, 0.9);
+}
+
+}  // namespace
+}  // namespace springy

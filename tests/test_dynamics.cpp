@@ -6,7 +6,10 @@
 
 #include "fixtures.h"
 #include "sim/diagnostics.h"
+#include "sim/scene.h"
 #include "sim/shapes.h"
+
+#include <algorithm>
 
 namespace springy {
 namespace {
@@ -228,6 +231,108 @@ TEST(Stages, ASceneAssemblesOnlyTheStagesItUses) {
   addBody(legacy, cube);
   EXPECT_EQ(legacy.struts.size(), 28u);
   EXPECT_TRUE(legacy.hinges.empty());
+}
+
+}  // namespace
+}  // namespace springy
+
+namespace springy {
+namespace {
+
+Model singleVertexModel(Vec3 gravity) {
+  Model model;
+  model.gravity = gravity;
+  model.mass = {2.0};
+  model.invMass = {0.5};
+  model.restPosition = {{0, 0, 0}};
+  model.initialVelocity = {{}};
+  model.body = {0};
+  BodyInfo info;
+  info.name = "point";
+  info.vertexCount = 1;
+  info.mass = 2.0;
+  model.bodies = {info};
+  return model;
+}
+
+TEST(Drag, FallingBodyApproachesTerminalVelocityGOverC) {
+  // m dv/dt = m g - c m v  =>  v(t) = (g / c)(1 - exp(-c t)).
+  Model model = singleVertexModel({0, -9.81, 0});
+  model.drag = 0.5;
+  World world(std::move(model), Integrator::RK4, 1e-3);
+  for (int s = 0; s < 4000; ++s) world.step();
+  const double t = world.time(), expected = -9.81 / 0.5 * (1 - std::exp(-0.5 * t));
+  EXPECT_NEAR(world.velocities()[0].y, expected, 1e-9);
+}
+
+TEST(Wind, SteadyWindCarriesADraggedBodyToTheAirVelocity) {
+  Model model = singleVertexModel({});
+  model.drag = 2.0;
+  model.wind = Wind{};
+  model.wind->velocity = {3.0, 0.0, -1.0};
+  World world(std::move(model), Integrator::RK4, 1e-3);
+  for (int s = 0; s < 5000; ++s) world.step();  // 10 time constants
+  const Vec3 expected = Vec3{3.0, 0.0, -1.0} * (1 - std::exp(-2.0 * world.time()));
+  EXPECT_LT(length(world.velocities()[0] - expected), 1e-9);
+}
+
+TEST(Wind, GustsRepeatForASeedAndDifferBetweenSeeds) {
+  SceneDesc scene;
+  scene.wind = Wind{};
+  scene.wind->velocity = {5, 0, 0};
+  scene.wind->gustStrength = 0.5;
+  BodyDesc body;
+  body.name = "b";
+  body.mesh = makeTetrahedron(1.0);
+  scene.bodies = {body};
+  scene.bodyMaterials = {Material{}};
+  auto gusts = [&](uint64_t seed) {
+    scene.wind->seed = seed;
+    const Model model = buildModel(scene);
+    std::vector<double> w;
+    for (int k = 0; k < 50; ++k) w.push_back(model.wind->airVelocity(0.1 * k).x);
+    return w;
+  };
+  EXPECT_EQ(gusts(7), gusts(7));
+  EXPECT_NE(gusts(7), gusts(8));
+  const std::vector<double> w = gusts(7);
+  const auto [lo, hi] = std::minmax_element(w.begin(), w.end());
+  EXPECT_GT(*hi - *lo, 1.0);  // the gusts are real: the air speed varies by more than 20%
+  EXPECT_GT(*lo, 0.0);        // around the base velocity, not reversing it
+}
+
+TEST(Wind, PressurePushesAFaceTurnedIntoTheWindOnly) {
+  // One triangle facing +x, wind along -x: pushed along -x with c A (w . n) n.
+  Model model;
+  model.gravity = {};
+  model.mass = {1, 1, 1};
+  model.invMass = {1, 1, 1};
+  model.restPosition = {{0, 0, 0}, {0, 1, 0}, {0, 0, -1}};
+  model.initialVelocity = std::vector<Vec3>(3);
+  model.body = {0, 0, 0};
+  model.faces = {{0, 2, 1}};
+  BodyInfo info;
+  info.name = "sail";
+  info.vertexCount = 3;
+  info.faceCount = 1;
+  model.bodies = {info};
+  model.wind = Wind{};
+  model.wind->velocity = {-4.0, 0, 0};
+  model.wind->pressure = 0.5;
+  const Vec3 n = normalized(cross(model.restPosition[2] - model.restPosition[0], model.restPosition[1] - model.restPosition[0]));
+  ASSERT_NEAR(n.x, 1.0, 1e-12);
+  World world(model, Integrator::RK4, 1e-3);
+  std::vector<Vec3> f(3);
+  world.computeForces(world.positions().data(), world.velocities().data(), 0.0, f.data());
+  const double area = 0.5;
+  Vec3 total = f[0] + f[1] + f[2];
+  EXPECT_NEAR(total.x, 0.5 * area * -4.0, 1e-12);
+  EXPECT_NEAR(length(total - Vec3{total.x, 0, 0}), 0.0, 1e-12);
+  // Turned away from the wind (leeward): no force.
+  model.wind->velocity = {4.0, 0, 0};
+  World leeward(model, Integrator::RK4, 1e-3);
+  leeward.computeForces(leeward.positions().data(), leeward.velocities().data(), 0.0, f.data());
+  EXPECT_EQ(f[0] + f[1] + f[2], Vec3{});
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // springy app: the subcommands.
 #pragma once
 
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,5 +43,24 @@ struct FramesOptions {
   RenderOverrides render;
 };
 int runFrames(const FramesOptions& options);
+
+// The stability advisor on a loaded scene: with autoSubsteps sets scene.substeps to a safe
+// number and says so, otherwise warns when the step exceeds the estimated stable limit.
+void adviseTimeStep(const std::string& path, SceneDesc& scene, bool autoSubsteps, std::ostream& log);
+
+struct SuggestOptions {
+  std::vector<std::string> scenes;
+  RunOverrides overrides;
+};
+int runSuggest(const SuggestOptions& options);
+
+struct StudyOptions {
+  std::string kind;               // "accuracy" or "stability"
+  std::string output = "study";   // directory
+  std::vector<std::string> scenes;  // showcase scenes for the accuracy study
+  bool quick = false;
+  int repeats = 3;
+};
+int runStudy(const StudyOptions& options);
 
 }  // namespace springy

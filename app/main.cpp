@@ -11,7 +11,26 @@ namespace {
 void addRunOverrides(CLI::App* cmd, springy::RunOverrides& o) {
   cmd->add_option("--integrator", o.integrator, "Override the scene's integrator: " + springy::integratorNames());
   cmd->add_option("--dt", o.dt, "Override the scene's time step [s]");
-  cmd->add_option("--substeps", o.substeps, "Steps of dt/N per dt");
+  cmd->add_option_function<std::string>(
+      "--substeps",
+      [&o](const std::string& text) {
+        if (text == "auto") {
+          o.autoSubsteps = true;
+          return;
+        }
+        std::size_t used = 0;
+        int n = 0;
+        try {
+          n = std::stoi(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != text.size()) {
+          throw CLI::ValidationError("--substeps", "expected a whole number or 'auto', got '" + text + "'");
+        }
+        o.substeps = n;
+      },
+      "Steps of dt/N per dt, or 'auto': the stability advisor's safe number");
   cmd->add_option("--duration", o.duration, "Override the simulated duration [s]");
 }
 
@@ -39,6 +58,20 @@ int main(int argc, char** argv) {
   addRunOverrides(checkCmd, check.overrides);
   checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV");
 
+  springy::SuggestOptions suggest;
+  CLI::App* suggestCmd =
+      app.add_subcommand("suggest", "Estimate stable dt and propose stable T, P, T_theta, P_theta for a scene");
+  suggestCmd->add_option("scenes", suggest.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  addRunOverrides(suggestCmd, suggest.overrides);
+
+  springy::StudyOptions study;
+  CLI::App* studyCmd = app.add_subcommand("study", "Work-precision (accuracy) or stability study of the integrators");
+  studyCmd->add_option("kind", study.kind, "accuracy or stability")->required()->check(CLI::IsMember({"accuracy", "stability"}));
+  studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")->capture_default_str();
+  studyCmd->add_option("--scenes", study.scenes, "Showcase scenes for the accuracy study (default: scenes/*.toml)");
+  studyCmd->add_flag("--quick", study.quick, "Small cases and few repeats (seconds; for tests and CI)");
+  studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")->capture_default_str();
+
 #ifdef SPRINGY_HAVE_RENDER
   springy::RenderOptions render;
   CLI::App* renderCmd = app.add_subcommand("render", "Simulate scenes and encode MP4 videos (H.264)");
@@ -65,6 +98,8 @@ int main(int argc, char** argv) {
   springy::installInterruptHandler();
   try {
     if (checkCmd->parsed()) return springy::runCheck(check);
+    if (suggestCmd->parsed()) return springy::runSuggest(suggest);
+    if (studyCmd->parsed()) return springy::runStudy(study);
 #ifdef SPRINGY_HAVE_RENDER
     if (renderCmd->parsed()) return springy::runRender(render);
     if (framesCmd->parsed()) return springy::runFrames(frames);

@@ -1,10 +1,13 @@
 #include "app/runner.h"
 
+#include <iostream>
+
+#include "app/commands.h"
 #include "sim/error.h"
 
 namespace springy {
 
-SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides) {
+SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise) {
   SceneDesc scene = loadScene(path);
   if (overrides.integrator && !parseIntegrator(*overrides.integrator, scene.integrator)) {
     throw Error("--integrator: '" + *overrides.integrator + "' is not one of: " + integratorNames());
@@ -21,6 +24,7 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides) 
     if (*overrides.substeps < 1) throw Error("--substeps must be at least 1");
     scene.substeps = *overrides.substeps;
   }
+  if (advise) adviseTimeStep(path, scene, overrides.autoSubsteps, std::cerr);
   return scene;
 }
 

@@ -15,10 +15,12 @@ struct RunOverrides {
   std::optional<std::string> integrator;
   std::optional<double> dt, duration;
   std::optional<int> substeps;
+  bool autoSubsteps = false;  // --substeps auto: the stability advisor picks them
 };
 
-// Loads a scene and applies the overrides. Throws springy::Error.
-SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides);
+// Loads a scene and applies the overrides. Throws springy::Error. advise: run the stability
+// advisor (warn on stderr when the step exceeds its estimate; pick --substeps auto).
+SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise = true);
 
 // Steps `world` until `time` (within half a step), checking the monitor after the last step.
 // Returns the failure, if any.

@@ -1,0 +1,158 @@
+// `springy suggest` and the time-step advice of check/render/frames: the stability advisor
+// (sim/stability.h) applied to a scene.
+#include <cmath>
+#include <optional>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "app/commands.h"
+#include "sim/error.h"
+#include "sim/stability.h"
+
+namespace springy {
+namespace {
+
+constexpr double kSafety = 0.9;  // aim below the estimated limit
+
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g s", s);
+  return buf;
+}
+
+// Smallest factor f in [lo, hi] with stable(f) true, assuming stable(hi) and monotonicity.
+template <class F>
+double smallestStable(F stable, double lo, double hi) {
+  if (stable(lo)) return lo;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    (stable(mid) ? hi : lo) = mid;
+  }
+  return hi;
+}
+
+}  // namespace
+
+void adviseTimeStep(const std::string& path, SceneDesc& scene, bool autoSubsteps, std::ostream& log) {
+  const Model model = buildModel(scene);
+  const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
+  if (!std::isfinite(r.dtMax)) return;
+  const BodyStability& b = r.bodies[r.limitingBody];
+  const std::string& body = model.bodies[r.limitingBody].name;
+  const int needed = safeSubsteps(scene.dt, r.dtMax, kSafety);
+  if (autoSubsteps) {
+    scene.substeps = needed;
+    log << "springy: " << path << ": --substeps auto: " << needed << " (step " << seconds(stepSize(scene))
+        << ", estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator) << ", body '"
+        << body << "')\n";
+  } else if (stepSize(scene) > r.dtMax) {
+    log << "springy: warning: " << path << ": the step " << seconds(stepSize(scene))
+        << " exceeds the estimated stable limit " << seconds(r.dtMax) << " of " << integratorName(scene.integrator)
+        << " (body '" << body << "': omega_max <= " << b.omegaMax << " rad/s, damping rate <= " << b.gammaMax
+        << " 1/s, 2/omega_max = " << seconds(2.0 / b.omegaMax) << "). Use --substeps auto (" << needed
+        << " substeps), a smaller dt, or `springy suggest " << path << "`.\n";
+  }
+}
+
+int runSuggest(const SuggestOptions& options) {
+  int failures = 0;
+  for (const std::string& path : options.scenes) {
+    SceneDesc scene;
+    try {
+      scene = loadSceneWith(path, options.overrides, false);
+    } catch (const Error& e) {
+      std::cerr << "springy suggest: " << e.what() << "\n";
+      ++failures;
+      continue;
+    }
+    const double h = stepSize(scene);
+    const Model model = buildModel(scene);
+    std::printf("%s: %s, integrator %s, dt %g s, %d substeps (step %g s), horizon %g s\n", path.c_str(),
+                scene.name.c_str(), std::string(integratorName(scene.integrator)).c_str(), scene.dt, scene.substeps, h,
+                scene.duration);
+    for (uint32_t bi = 0; bi < model.bodies.size(); ++bi) {
+      const BodyInfo& info = model.bodies[bi];
+      const BodyDesc& desc = scene.bodies[bi];
+      const std::vector<RowBound> rows = gershgorinRows(model, model.restPosition.data(), bi);
+      auto limit = [&](const ParameterScale& s) { return bodyStability(rows, scene.integrator, scene.duration, s).dtMax; };
+      const BodyStability now = bodyStability(rows, scene.integrator, scene.duration);
+      std::printf("  body '%s' (%u vertices, %u struts, %u hinges)\n", info.name.c_str(), info.vertexCount,
+                  info.strutCount, info.hingeCount);
+      std::printf("    omega_max <= %.4g rad/s (2/omega_max = %.4g s), damping rate <= %.4g 1/s\n", now.omegaMax,
+                  now.omegaMax > 0 ? 2.0 / now.omegaMax : INFINITY, now.gammaMax);
+      if (!std::isfinite(now.dtMax)) {
+        std::printf("    %s is unconditionally stable on these springs: any dt and parameters\n",
+                    std::string(integratorName(scene.integrator)).c_str());
+        continue;
+      }
+      const int substeps = safeSubsteps(scene.dt, now.dtMax, kSafety);
+      std::printf("    largest stable step with the current values: %.4g s -> %s (use dt <= %.4g s, or --substeps %d "
+                  "with dt %g s)\n",
+                  now.dtMax, h <= now.dtMax ? "the current step is stable" : "the current step is UNSTABLE",
+                  kSafety * now.dtMax, substeps, scene.dt);
+      // Uniform scale f of every time constant: the limit scales with f for the
+      // horizon-independent methods; bisect anyway (explicit Euler's depends on the horizon).
+      auto scaled = [](double f, double sp, double sd, double hp, double hd) {
+        return ParameterScale{1.0 / (f * f * sp * sp), 1.0 / (f * sd), 1.0 / (f * f * hp * hp), 1.0 / (f * hd)};
+      };
+      const double target = h / kSafety;
+      double f = 1.0;
+      if (!(limit(scaled(1, 1, 1, 1, 1)) >= target)) {
+        double hi = 2.0;
+        while (!(limit(scaled(hi, 1, 1, 1, 1)) >= target) && hi < 1e6) hi *= 2;
+        f = smallestStable([&](double x) { return limit(scaled(x, 1, 1, 1, 1)) >= target; }, hi / 2, hi);
+      }
+      auto value = [&](const char* periodKey, double period, const std::optional<double>& direct, const char* directKey,
+                       double directScale) {
+        std::ostringstream s;
+        const std::string key = direct ? directKey : periodKey;
+        s << key << (key.back() == '=' ? " " : " = ") << (direct ? *direct * directScale : period);
+        return s.str();
+      };
+      const bool hinges = info.hingeCount > 0;
+      std::printf("    suggested for a step of %g s%s:\n", h,
+                  f > 1.0 ? "" : " (the current values are stable; the stiffest values follow)");
+      if (f > 1.0) {
+        std::printf("      all time constants x %.3g: %s, %s", f,
+                    value("strut_period", desc.strutPeriod * f, desc.strutStiffness, "strut_stiffness", 1 / (f * f)).c_str(),
+                    value("strut_decay", desc.strutDecay * f, desc.strutDamping, "strut_damping", 1 / f).c_str());
+        if (hinges) {
+          std::printf(", %s, %s",
+                      value("hinge_period", desc.hingePeriod * f, desc.hingeStiffness, "hinge_stiffness", 1 / (f * f)).c_str(),
+                      value("hinge_decay", desc.hingeDecay * f, desc.hingeDamping, "hinge_damping", 1 / f).c_str());
+        }
+        std::printf("\n");
+      }
+      // The stiffest value of each parameter alone, the others at f times their value.
+      auto alone = [&](int which) {
+        return smallestStable(
+            [&](double g) {
+              const double sp = which == 0 ? g : 1, sd = which == 1 ? g : 1, hp = which == 2 ? g : 1, hd = which == 3 ? g : 1;
+              return limit(scaled(f, sp, sd, hp, hd)) >= target;
+            },
+            1e-4, 1.0);
+      };
+      const double gp = alone(0), gd = alone(1);
+      std::printf("      stiffest stable values, one at a time: %s%s, %s%s", gp <= 1e-4 ? "any " : "",
+                  value("strut_period >=", desc.strutPeriod * f * gp, desc.strutStiffness, "strut_stiffness <=",
+                        1 / (f * f * gp * gp)).c_str(),
+                  gd <= 1e-4 ? "any " : "",
+                  value("strut_decay >=", desc.strutDecay * f * gd, desc.strutDamping, "strut_damping <=", 1 / (f * gd))
+                      .c_str());
+      if (hinges) {
+        const double hp = alone(2), hd = alone(3);
+        std::printf(", %s%s, %s%s", hp <= 1e-4 ? "any " : "",
+                    value("hinge_period >=", desc.hingePeriod * f * hp, desc.hingeStiffness, "hinge_stiffness <=",
+                          1 / (f * f * hp * hp)).c_str(),
+                    hd <= 1e-4 ? "any " : "",
+                    value("hinge_decay >=", desc.hingeDecay * f * hd, desc.hingeDamping, "hinge_damping <=", 1 / (f * hd))
+                        .c_str());
+      }
+      std::printf("\n");
+    }
+  }
+  return failures == 0 ? 0 : 1;
+}
+
+}  // namespace springy

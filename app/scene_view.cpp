@@ -13,6 +13,7 @@ render::Material toMaterial(const Material& m) {
   r.colour = toGlm(m.color);
   r.alpha = static_cast<float>(m.alpha);
   r.shininess = static_cast<float>(m.shininess);
+  r.flat = m.flat;
   return r;
 }
 

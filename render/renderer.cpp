@@ -51,6 +51,7 @@ uniform vec3 uColour;
 uniform float uAlpha;
 uniform float uShininess;
 uniform float uSpecular;
+uniform int uFlat;          // 1: faceted, normals from the triangle's own plane
 uniform vec3 uToLight;      // unit vector towards the light
 uniform vec3 uLightColour;
 uniform vec3 uAmbient;
@@ -86,6 +87,9 @@ float shadowFactor() {
 void main() {
   vec3 n = normalize(vNormal);
   if (!gl_FrontFacing) n = -n;  // two-sided lighting
+  // Flat shading: the screen-space derivatives of the position span the triangle's plane;
+  // their cross product faces the viewer.
+  if (uFlat != 0) n = normalize(cross(dFdx(vPos), dFdy(vPos)));
   vec3 base = uColour;
   float fog = 0.0;
   if (uGround != 0) {
@@ -503,6 +507,7 @@ struct Renderer::Impl {
     meshProg.set("uAlpha", twoLayers ? 1.0f - std::sqrt(1.0f - alpha) : alpha);
     meshProg.set("uShininess", std::max(m.material.shininess, 1.0f));
     meshProg.set("uSpecular", m.ground ? 0.0f : m.material.specular);
+    meshProg.set("uFlat", m.material.flat ? 1 : 0);
     meshProg.set("uGround", m.ground ? 1 : 0);
     if (m.ground) {
       meshProg.set("uGroundOrigin", m.groundOrigin);

@@ -27,6 +27,7 @@ struct Material {
   float alpha = 1.0f;
   float shininess = 32.0f;   // Blinn-Phong exponent
   float specular = 0.25f;    // highlight strength, 0 = matte
+  bool flat = false;         // faceted shading (a cube's faces) instead of smooth normals
 };
 
 // One directional light. direction: the way the light travels (e.g. (0,-1,0) = straight down).

@@ -204,6 +204,7 @@ Material readMaterial(Reader& r, const Material& fallback) {
   m.color = r.color("color", fallback.color);
   m.alpha = r.inRange("alpha", fallback.alpha, 0.0, 1.0);
   m.shininess = r.positive("shininess", fallback.shininess);
+  m.flat = r.boolean("flat_shading", fallback.flat);
   return m;
 }
 

@@ -20,6 +20,7 @@ struct Material {
   Vec3 color{0.8, 0.8, 0.8};  // linear RGB in [0, 1]
   double alpha = 1.0;          // 1 opaque, < 1 translucent
   double shininess = 32.0;     // Phong exponent
+  bool flat = false;           // faceted shading (for boxy shapes)
 };
 
 struct CameraDesc {

@@ -345,3 +345,38 @@ TEST(MeshBuilders, OutwardWinding) {
   EXPECT_EQ(box.vertexCount(), 24u);
   EXPECT_EQ(box.indices.size(), 36u);
 }
+
+// A cube of 8 shared vertices: smooth normals shade each face as a gradient (the corners'
+// normals point diagonally); flat shading gives each face one uniform colour.
+TEST(RenderScene, FlatShadingMakesEachFaceUniform) {
+  RenderSettings s = small(96, 96);
+  s.shadows = false;
+  Camera cam;
+  cam.position = {0.0f, 0.0f, 4.0f};
+  cam.target = {0.0f, 0.0f, 0.0f};
+  cam.fovYDeg = 40.0f;
+  const std::vector<float> corners = {-1, -1, -1, 1, -1, -1, 1, 1, -1, -1, 1, -1,
+                                      -1, -1, 1,  1, -1, 1,  1, 1, 1,  -1, 1, 1};
+  const std::vector<std::uint32_t> tris = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                           2, 3, 7, 2, 7, 6, 1, 2, 6, 1, 6, 5, 0, 4, 7, 0, 7, 3};
+  Material m;
+  m.colour = {0.8f, 0.8f, 0.8f};
+  m.specular = 0.0f;
+  // The front face (z = +1) fills the middle of the view; compare two points on it.
+  auto spread = [&](bool flat) {
+    m.flat = flat;
+    Renderer fresh(s);
+    fresh.setCamera(cam);
+    fresh.setSky(glm::vec3(0.0f), glm::vec3(0.0f));
+    const MeshId id = fresh.addDynamicMesh(8, tris, m);
+    fresh.updateDynamicMesh(id, corners);
+    fresh.render();
+    std::vector<std::uint8_t> rgba;
+    fresh.readPixels(rgba);
+    const glm::vec3 a = regionMean(rgba, 96, 96, 36, 36, 1), b = regionMean(rgba, 96, 96, 60, 60, 1);
+    EXPECT_GT(luminance(a), 10.0f);  // lit, not sky
+    return std::fabs(luminance(a) - luminance(b));
+  };
+  EXPECT_LT(spread(true), 1.0f);
+  EXPECT_GT(spread(false), 3.0f);
+}

@@ -9,6 +9,23 @@
 
 namespace springy::test {
 
+// One free vertex of the given mass, no colliders.
+inline Model vertexModel(const Vec3& position, const Vec3& velocity, const Vec3& gravity, double mass = 1.0) {
+  Model model;
+  model.gravity = gravity;
+  model.mass = {mass};
+  model.invMass = {1.0 / mass};
+  model.restPosition = {position};
+  model.initialVelocity = {velocity};
+  model.body = {0};
+  BodyInfo info;
+  info.name = "vertex";
+  info.vertexCount = 1;
+  info.mass = mass;
+  model.bodies = {info};
+  return model;
+}
+
 // Two vertices joined by one strut along x, no gravity, no colliders.
 inline Model strutModel(double m0, double m1, double restLength, double k, double d, bool pinFirst) {
   Model model;

@@ -2,6 +2,8 @@
 // speed, earliest hit wins, restitution, Coulomb friction, resting contact, BVH = brute force.
 #include <gtest/gtest.h>
 
+#include "fixtures.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -20,22 +22,7 @@ constexpr Integrator kAll[] = {Integrator::ExplicitEuler, Integrator::Symplectic
                                Integrator::Leapfrog, Integrator::RK4};
 constexpr double kG = 9.81;
 
-// One free vertex of unit mass, no colliders yet.
-Model vertexModel(Vec3 position, Vec3 velocity, Vec3 gravity) {
-  Model model;
-  model.gravity = gravity;
-  model.mass = {1.0};
-  model.invMass = {1.0};
-  model.restPosition = {position};
-  model.initialVelocity = {velocity};
-  model.body = {0};
-  BodyInfo info;
-  info.name = "vertex";
-  info.vertexCount = 1;
-  info.mass = 1.0;
-  model.bodies = {info};
-  return model;
-}
+using test::vertexModel;
 
 // Uniform double in [lo, hi) from the raw 32-bit output of mt19937 (no std:: distribution, so
 // the sequence is the same with every standard library).

@@ -239,25 +239,9 @@ TEST(Stages, ASceneAssemblesOnlyTheStagesItUses) {
 namespace springy {
 namespace {
 
-Model singleVertexModel(Vec3 gravity) {
-  Model model;
-  model.gravity = gravity;
-  model.mass = {2.0};
-  model.invMass = {0.5};
-  model.restPosition = {{0, 0, 0}};
-  model.initialVelocity = {{}};
-  model.body = {0};
-  BodyInfo info;
-  info.name = "point";
-  info.vertexCount = 1;
-  info.mass = 2.0;
-  model.bodies = {info};
-  return model;
-}
-
 TEST(Drag, FallingBodyApproachesTerminalVelocityGOverC) {
   // m dv/dt = m g - c m v  =>  v(t) = (g / c)(1 - exp(-c t)).
-  Model model = singleVertexModel({0, -9.81, 0});
+  Model model = test::vertexModel({}, {}, {0, -9.81, 0}, 2.0);
   model.drag = 0.5;
   World world(std::move(model), Integrator::RK4, 1e-3);
   for (int s = 0; s < 4000; ++s) world.step();
@@ -266,7 +250,7 @@ TEST(Drag, FallingBodyApproachesTerminalVelocityGOverC) {
 }
 
 TEST(Wind, SteadyWindCarriesADraggedBodyToTheAirVelocity) {
-  Model model = singleVertexModel({});
+  Model model = test::vertexModel({}, {}, {}, 2.0);
   model.drag = 2.0;
   model.wind = Wind{};
   model.wind->velocity = {3.0, 0.0, -1.0};

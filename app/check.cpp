@@ -48,7 +48,9 @@ int runCheck(const CheckOptions& options) {
     }
     const auto wallStart = std::chrono::steady_clock::now();
     World world(buildModel(scene), scene.integrator, stepSize(scene));
-    Monitor monitor(world);
+    MonitorLimits limits;
+    limits.minVolume = options.minVolume;
+    Monitor monitor(world, limits);
     std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%d substeps), %g s\n", path.c_str(),
                 scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
                 std::string(integratorName(scene.integrator)).c_str(), scene.dt, scene.substeps, scene.duration);
@@ -86,6 +88,18 @@ int runCheck(const CheckOptions& options) {
       if (monitor.energyChecked()) {
         std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
                     r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
+      }
+    }
+    if (!failure && options.endVolume > 0.0) {
+      for (uint32_t b = 0; b < world.model().bodies.size() && !failure; ++b) {
+        const BodyInfo& info = world.model().bodies[b];
+        const double ratio = monitor.records()[b].last.volume / info.restVolume;
+        if (ratio < options.endVolume) {
+          char what[256];
+          std::snprintf(what, sizeof what, "body '%s' ends at %.1f%% of its rest volume, below the required %.1f%%",
+                        info.name.c_str(), 100.0 * ratio, 100.0 * options.endVolume);
+          failure = Failure{b, world.stepCount(), world.time(), what};
+        }
       }
     }
     if (failure) {

@@ -14,6 +14,8 @@ struct CheckOptions {
   std::vector<std::string> scenes;
   RunOverrides overrides;
   std::string trace;  // CSV path, empty for none
+  double minVolume = 0.0;  // fail when a body's volume falls below this fraction of rest
+  double endVolume = 0.0;  // fail when a body ends below this fraction of its rest volume
 };
 int runCheck(const CheckOptions& options);
 

@@ -57,6 +57,10 @@ int main(int argc, char** argv) {
   checkCmd->add_option("scenes", check.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   addRunOverrides(checkCmd, check.overrides);
   checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV");
+  checkCmd->add_option("--min-volume", check.minVolume, "Fail if a body's volume falls below this fraction of rest")
+      ->check(CLI::Range(0.0, 1.0));
+  checkCmd->add_option("--end-volume", check.endVolume, "Fail if a body ends below this fraction of its rest volume")
+      ->check(CLI::Range(0.0, 1.0));
 
   springy::SuggestOptions suggest;
   CLI::App* suggestCmd =

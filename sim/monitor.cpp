@@ -89,6 +89,14 @@ std::optional<Failure> Monitor::check(const World& world) {
       const double ratio = m.volume / info.restVolume;
       r.minVolumeRatio = std::min(r.minVolumeRatio, ratio);
       r.maxVolumeRatio = std::max(r.maxVolumeRatio, ratio);
+      if (ratio < limits_.minVolume) {
+        std::ostringstream s;
+        s << "its volume fell to " << 100.0 * ratio << "% of rest, below the required " << 100.0 * limits_.minVolume
+          << "%";
+        return fail(s.str(), "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
+                             "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
+                             "strut_period.");
+      }
     }
   }
   return std::nullopt;

@@ -17,6 +17,8 @@ struct MonitorLimits {
   double sizeFactor = 10.0;        // a body larger than this times its rest size has blown up
   double energyTolerance = 0.02;   // allowed rise of total energy, as a fraction of its scale
   double penetration = 1e-4;       // allowed depth behind a plane, as a fraction of body size
+  double minVolume = 0.0;          // a body whose volume falls below this fraction of rest has
+                                   // collapsed (0: not checked)
 };
 
 struct Failure {

@@ -60,6 +60,19 @@ TEST_F(AppTest, CheckNamesTheBodyStepAndRemedyOfABlowUp) {
   EXPECT_NE(r.output.find("smaller dt"), std::string::npos) << r.output;
 }
 
+TEST_F(AppTest, VolumeLimitsFailACollapsingBody) {
+  // The tiny ball squashes on landing: a 99.9% floor is broken mid-run, and a 99.99% end
+  // requirement after a short run is not met either; 50% passes.
+  Result r = run("check " + data("tiny.toml") + " --min-volume 0.999");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("its volume fell to"), std::string::npos) << r.output;
+  r = run("check " + data("tiny.toml") + " --end-volume 0.99999");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("of its rest volume, below the required"), std::string::npos) << r.output;
+  r = run("check " + data("tiny.toml") + " --min-volume 0.5 --end-volume 0.5");
+  EXPECT_EQ(r.status, 0) << r.output;
+}
+
 TEST_F(AppTest, UnknownSceneKeyIsReportedWithFileAndLine) {
   const Result r = run("check " + data("typo.toml"));
   EXPECT_EQ(r.status, 1);

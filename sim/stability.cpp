@@ -198,6 +198,7 @@ RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, do
                  : m.find("blew up") != std::string::npos   ? "blow-up"
                  : m.find("energy") != std::string::npos    ? "energy"
                  : m.find("behind a plane") != std::string::npos ? "penetration"
+                 : m.find("volume") != std::string::npos    ? "volume"
                                                                  : "other";
       break;
     }

@@ -85,7 +85,7 @@ int safeSubsteps(double dt, double dtMax, double safety = 0.9);
 struct RunOutcome {
   bool stable = true;
   std::string failure;   // the monitor's message when not stable
-  std::string kind;      // "nan", "blow-up", "energy", "penetration" or "" when stable
+  std::string kind;      // "nan", "blow-up", "energy", "penetration", "volume" or "" when stable
   uint64_t step = 0;     // the step at which it failed
   bool finiteAtEnd = true;  // every position and velocity finite when the run stopped
 };

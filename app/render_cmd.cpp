@@ -1,12 +1,23 @@
 // `springy render` and `springy frames`: scenes to MP4 videos and PNG stills.
 //
-// Video pipeline: the main thread simulates, draws and reads back each frame; an encoding
-// thread converts and encodes it. A bounded queue of recycled frame buffers joins the two, so
-// the wall time approaches the slower stage instead of the sum, and memory stays bounded.
+// Video pipeline, three threads joined by bounded queues of recycled buffers (memory stays
+// bounded, nothing is allocated per frame):
+//   simulation thread  advances the World frame by frame and copies the positions into a
+//                      FrameSnapshot (the World is not thread-safe; only this thread touches it);
+//   main thread        owns the GL context: draws each snapshot and reads the pixels back;
+//   encoding thread    converts to yuv420p and encodes.
+// Each stage works on a different frame, so the wall time approaches the slowest stage rather
+// than the sum. The frames are exactly those of the serial order (simulate k, draw k, encode k):
+// the simulation is deterministic and the queues are FIFO. SPRINGY_RENDER_SERIAL=1 runs that
+// serial order on one thread (the reference the tests compare against).
+// SPRINGY_RENDER_PROFILE=1 also prints the time of each render pass (glFinish after each);
+// SPRINGY_RENDER_AA=msaa anti-aliases with 4x MSAA instead of FXAA (for comparisons).
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -57,7 +68,20 @@ std::string outputFor(const std::string& scenePath, const std::string& out, std:
 }
 
 struct Frame {
-  std::vector<uint8_t> rgba;
+  std::vector<uint8_t> rgba;  // bottom-up rows, as glReadPixels gives them
+};
+
+bool envFlag(const char* name) {
+  const char* v = std::getenv(name);
+  return v && *v && std::string(v) != "0";
+}
+
+// Joins a thread when leaving scope, also by an exception (after the queues were closed).
+struct Joiner {
+  std::thread& t;
+  ~Joiner() {
+    if (t.joinable()) t.join();
+  }
 };
 
 int renderOne(const std::string& path, const std::string& outPath, const RenderOptions& options) {
@@ -66,7 +90,11 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   AtomicFile output(outPath);  // an unwritable target fails here, before any simulation
   World world(buildModel(scene), scene.integrator, stepSize(scene));
   Monitor monitor(world);
-  SceneView view(scene, world, renderSettingsOf(scene));
+  render::RenderSettings rs = renderSettingsOf(scene);
+  rs.profilePasses = envFlag("SPRINGY_RENDER_PROFILE");
+  if (const char* aa = std::getenv("SPRINGY_RENDER_AA"); aa && std::string(aa) == "msaa")
+    rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
+  SceneView view(scene, world, rs);
 
   render::VideoEncoder::setLibraryLogging(false);
   render::VideoEncoder encoder;
@@ -76,67 +104,121 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   vs.fps = static_cast<int>(std::lround(scene.render.fps));
   vs.crf = scene.render.crf;
   vs.preset = scene.render.preset;
+  if (const char* t = std::getenv("SPRINGY_X264_THREADS")) vs.threads = std::atoi(t);
   encoder.open(output.temporaryPath(), vs);
 
   const long frames = std::max(1L, std::lround(scene.duration * scene.render.fps));
   const std::size_t bytes = static_cast<std::size_t>(scene.render.width) * static_cast<std::size_t>(scene.render.height) * 4;
-  BoundedQueue<Frame> full(3), empty(4);
-  for (int i = 0; i < 4; ++i) empty.push(Frame{std::vector<uint8_t>(bytes)});
-
-  std::exception_ptr encodeError;
-  std::thread encodeThread([&] {
-    Frame f;
-    try {
-      while (full.pop(f)) {
-        encoder.writeFrame(f.rgba);
-        empty.push(std::move(f));
-      }
-    } catch (...) {
-      encodeError = std::current_exception();
-      empty.close();  // unblock the producer
-    }
-  });
-  auto stopEncoder = [&] {
-    full.close();
-    encodeThread.join();
-  };
+  const bool serial = envFlag("SPRINGY_RENDER_SERIAL");
 
   Progress progress(scene.name, frames);
-  double simMs = 0.0;
+  std::atomic<long long> simNs{0};
+  auto simulate = [&](long k) {
+    const auto t0 = Clock::now();
+    std::optional<Failure> f = advanceTo(world, monitor, static_cast<double>(k) / scene.render.fps);
+    simNs += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
+    return f;
+  };
+  auto report = [&](long done) {
+    const auto& rt = view.renderer().timings();
+    const render::EncodeTimings et = encoder.timings();
+    const double simMs = static_cast<double>(simNs.load()) / 1e6;
+    char detail[160];
+    std::snprintf(detail, sizeof detail, "sim %.1f, render %.1f, encode %.1f frames/s",
+                  1000.0 * static_cast<double>(done) / std::max(simMs, 1e-9),
+                  1000.0 * static_cast<double>(rt.frames) / std::max(rt.totalRenderMs, 1e-9),
+                  1000.0 * static_cast<double>(et.frames) / std::max(et.totalEncodeMs + et.totalConvertMs, 1e-9));
+    progress.update(done, detail);
+  };
+
   const auto wallStart = Clock::now();
   std::optional<Failure> failure;
   bool interruptedRun = false;
-  try {
+  if (serial) {
+    FrameSnapshot snapshot;
+    Frame f{std::vector<uint8_t>(bytes)};
     for (long k = 0; k < frames; ++k) {
       if (interrupted()) {
         interruptedRun = true;
         break;
       }
-      const auto t0 = Clock::now();
-      failure = advanceTo(world, monitor, static_cast<double>(k) / scene.render.fps);
-      simMs += msSince(t0);
+      failure = simulate(k);
       if (failure) break;
-      view.draw(world);
-      Frame f;
-      if (!empty.pop(f)) break;  // the encoder failed
-      view.renderer().readPixels(f.rgba);
-      if (!full.push(std::move(f))) break;
-      const auto& rt = view.renderer().timings();
-      const render::EncodeTimings et = encoder.timings();
-      char detail[160];
-      const double n = static_cast<double>(k + 1);
-      std::snprintf(detail, sizeof detail, "sim %.1f, render %.1f, encode %.1f frames/s", 1000.0 * n / std::max(simMs, 1e-9),
-                    1000.0 * static_cast<double>(rt.frames) / std::max(rt.totalRenderMs, 1e-9),
-                    1000.0 * static_cast<double>(et.frames) / std::max(et.totalEncodeMs + et.totalConvertMs, 1e-9));
-      progress.update(k + 1, detail);
+      takeSnapshot(world, snapshot);
+      view.draw(snapshot);
+      view.renderer().readPixels(f.rgba, render::RowOrder::BottomUp);
+      encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
+      report(k + 1);
     }
-  } catch (...) {
-    stopEncoder();
-    throw;
+  } else {
+    BoundedQueue<FrameSnapshot> freeSnapshots(3), snapshots(3);
+    for (int i = 0; i < 3; ++i) freeSnapshots.push(FrameSnapshot{});
+    BoundedQueue<Frame> empty(4), full(3);
+    for (int i = 0; i < 4; ++i) empty.push(Frame{std::vector<uint8_t>(bytes)});
+
+    std::exception_ptr simError, encodeError;
+    std::atomic<bool> simInterrupted{false};
+    std::thread simThread([&] {
+      try {
+        for (long k = 0; k < frames; ++k) {
+          if (interrupted()) {
+            simInterrupted = true;
+            break;
+          }
+          if ((failure = simulate(k))) break;
+          FrameSnapshot s;
+          if (!freeSnapshots.pop(s)) break;  // the renderer stopped
+          takeSnapshot(world, s);
+          if (!snapshots.push(std::move(s))) break;
+        }
+      } catch (...) {
+        simError = std::current_exception();
+      }
+      snapshots.close();  // the renderer drains what is left, then stops
+    });
+    std::thread encodeThread([&] {
+      Frame f;
+      try {
+        while (full.pop(f)) {
+          encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
+          empty.push(std::move(f));
+        }
+      } catch (...) {
+        encodeError = std::current_exception();
+        empty.close();  // unblock the renderer
+      }
+    });
+    {
+      // Declared after the threads: on the way out (also by an exception) the queues are closed
+      // first, so both threads finish, then they are joined.
+      Joiner joinSim{simThread}, joinEncode{encodeThread};
+      struct Closer {
+        BoundedQueue<FrameSnapshot>& a;
+        BoundedQueue<FrameSnapshot>& b;
+        BoundedQueue<Frame>& c;
+        ~Closer() {
+          a.close();
+          b.close();
+          c.close();
+        }
+      } closer{freeSnapshots, snapshots, full};
+      FrameSnapshot s;
+      long done = 0;
+      while (snapshots.pop(s)) {
+        view.draw(s);
+        freeSnapshots.push(std::move(s));
+        Frame f;
+        if (!empty.pop(f)) break;  // the encoder failed
+        view.renderer().readPixels(f.rgba, render::RowOrder::BottomUp);
+        if (!full.push(std::move(f))) break;
+        report(++done);
+      }
+    }
+    interruptedRun = simInterrupted;
+    if (simError) std::rethrow_exception(simError);
+    if (encodeError) std::rethrow_exception(encodeError);
   }
-  stopEncoder();
   progress.finish();
-  if (encodeError) std::rethrow_exception(encodeError);
   if (interruptedRun) {
     std::cerr << "springy render: interrupted; " << output.target() << " not written\n";
     return 130;
@@ -153,14 +235,23 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   const auto& rt = view.renderer().timings();
   const render::EncodeTimings et = encoder.timings();
   const auto size = std::filesystem::file_size(outPath);
+  const double n = static_cast<double>(frames);
   std::printf("%s -> %s: %ld frames, %.2f s of %dx%d video at %g fps (%s), %.1f MB\n", path.c_str(), outPath.c_str(),
-              frames, static_cast<double>(frames) / scene.render.fps, scene.render.width, scene.render.height,
+              frames, n / scene.render.fps, scene.render.width, scene.render.height,
               scene.render.fps, encoder.codecName().c_str(), static_cast<double>(size) / 1e6);
   std::printf("  wall %.1f s (%.1f frames/s); per frame: simulate %.1f ms, render %.1f ms, read back %.1f ms, "
-              "convert %.1f ms, encode %.1f ms (convert and encode overlap with the rest)\n",
-              wall, static_cast<double>(frames) / wall, simMs / static_cast<double>(frames),
+              "convert %.1f ms, encode %.1f ms (%s)\n",
+              wall, n / wall, static_cast<double>(simNs.load()) / 1e6 / n,
               rt.totalRenderMs / static_cast<double>(rt.frames), rt.totalReadbackMs / static_cast<double>(rt.readbacks),
-              et.totalConvertMs / static_cast<double>(et.frames), et.totalEncodeMs / static_cast<double>(et.frames));
+              et.totalConvertMs / static_cast<double>(et.frames), et.totalEncodeMs / static_cast<double>(et.frames),
+              serial ? "one thread, in sequence" : "simulate, render + read back, convert + encode overlap on 3 threads");
+  if (rs.profilePasses) {
+    std::printf("  render passes per frame (glFinish after each):");
+    for (std::size_t p = 0; p < render::kRenderPassCount; ++p)
+      std::printf("%s %s %.2f ms", p ? "," : "", render::passName(static_cast<render::RenderPass>(p)),
+                  rt.passMs[p] / static_cast<double>(rt.frames));
+    std::printf("\n");
+  }
   return 0;
 }
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <span>
 
 namespace springy {
 namespace {
@@ -40,6 +41,7 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
     : scene_(scene), renderer_(settings) {
   const Model& model = world.model();
   const RenderDesc& rd = scene.render;
+  integrator_ = std::string(integratorName(world.integrator()));
   Bounds all = boundsOf(world.positions());
   // Bodies: topology once, body-local indices.
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
@@ -50,6 +52,7 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
       for (uint32_t v : model.faces[f]) indices.push_back(v - info.firstVertex);
     }
     bodyMeshes_.push_back(renderer_.addDynamicMesh(info.vertexCount, indices, toMaterial(scene.bodyMaterials[b])));
+    bodyVertexCounts_.push_back(info.vertexCount);
   }
   for (const PlaneDesc& p : scene.planes) {
     if (!p.visible) continue;
@@ -97,28 +100,44 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
   renderer_.setSky(toGlm(rd.skyTop), toGlm(rd.skyBottom));
 }
 
-void SceneView::draw(const World& world) {
+void takeSnapshot(const World& world, FrameSnapshot& snapshot) {
+  snapshot.time = world.time();
+  snapshot.dt = world.dt();
   const Model& model = world.model();
   const std::vector<Vec3>& x = world.positions();
-  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
-    const BodyInfo& info = model.bodies[b];
-    positions_.resize(static_cast<std::size_t>(info.vertexCount) * 3);
+  std::size_t n = 0;
+  for (const BodyInfo& info : model.bodies) n += info.vertexCount;
+  snapshot.positions.resize(3 * n);
+  float* out = snapshot.positions.data();
+  for (const BodyInfo& info : model.bodies) {
     for (uint32_t i = 0; i < info.vertexCount; ++i) {
       const Vec3& p = x[info.firstVertex + i];
-      positions_[3 * i + 0] = static_cast<float>(p.x);
-      positions_[3 * i + 1] = static_cast<float>(p.y);
-      positions_[3 * i + 2] = static_cast<float>(p.z);
+      *out++ = static_cast<float>(p.x);
+      *out++ = static_cast<float>(p.y);
+      *out++ = static_cast<float>(p.z);
     }
-    renderer_.updateDynamicMesh(bodyMeshes_[b], positions_);
+  }
+}
+
+void SceneView::draw(const FrameSnapshot& snapshot) {
+  std::size_t offset = 0;
+  for (std::size_t b = 0; b < bodyMeshes_.size(); ++b) {
+    const std::size_t n = 3 * static_cast<std::size_t>(bodyVertexCounts_[b]);
+    renderer_.updateDynamicMesh(bodyMeshes_[b], std::span<const float>(snapshot.positions).subspan(offset, n));
+    offset += n;
   }
   if (scene_.render.overlay) {
     char time[64], method[96];
-    std::snprintf(time, sizeof time, "t = %.2f s", world.time());
-    std::snprintf(method, sizeof method, "%s, dt = %g ms%s", std::string(integratorName(world.integrator())).c_str(),
-                  world.dt() * 1000.0, "");
+    std::snprintf(time, sizeof time, "t = %.2f s", snapshot.time);
+    std::snprintf(method, sizeof method, "%s, dt = %g ms%s", integrator_.c_str(), snapshot.dt * 1000.0, "");
     renderer_.setOverlayText({scene_.name, time, method});
   }
   renderer_.render();
+}
+
+void SceneView::draw(const World& world) {
+  takeSnapshot(world, scratch_);
+  draw(scratch_);
 }
 
 }  // namespace springy

@@ -11,10 +11,23 @@
 
 namespace springy {
 
+// What a frame needs from one simulated instant, copied out of the World so that simulation and
+// drawing can run on different threads (the World is not thread-safe). Buffers are reused:
+// takeSnapshot only allocates when the vertex count grows.
+struct FrameSnapshot {
+  double time = 0.0;
+  double dt = 0.0;
+  std::vector<float> positions;  // x, y, z per vertex of every body, bodies in model order
+};
+void takeSnapshot(const World& world, FrameSnapshot& snapshot);
+
 class SceneView {
  public:
+  // Reads the world's model (topology, colliders) once; later calls never touch `world`.
   SceneView(const SceneDesc& scene, const World& world, render::RenderSettings settings);
-  // Uploads the world's current positions and overlay text, draws the frame.
+  // Uploads the snapshot's positions and overlay text, draws the frame (same as draw(world) at
+  // the instant the snapshot was taken).
+  void draw(const FrameSnapshot& snapshot);
   void draw(const World& world);
   render::Renderer& renderer() { return renderer_; }
 
@@ -22,7 +35,9 @@ class SceneView {
   const SceneDesc& scene_;
   render::Renderer renderer_;
   std::vector<render::MeshId> bodyMeshes_;
-  std::vector<float> positions_;  // scratch, one body at a time
+  std::vector<uint32_t> bodyVertexCounts_;
+  std::string integrator_;
+  FrameSnapshot scratch_;  // for draw(world)
 };
 
 // Render settings from a scene's [render] table.

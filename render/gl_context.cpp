@@ -43,9 +43,33 @@ void makeTarget(GLsizei w, GLsizei h, GLsizei samples, unsigned& fbo, unsigned& 
     throw RenderError("GlContext: framebuffer (" + std::to_string(w) + "x" + std::to_string(h) +
                       ", " + std::to_string(samples) + " samples) is " + fboStatusText(status));
 }
+// A single-sample framebuffer whose colour attachment is a texture (linear filtering, clamped),
+// for a post-processing pass to sample.
+void makeTextureTarget(GLsizei w, GLsizei h, unsigned& fbo, unsigned& tex, unsigned& depth) {
+  glGenFramebuffers(1, &fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glGenTextures(1, &tex);
+  glBindTexture(GL_TEXTURE_2D, tex);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, w, h, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glBindTexture(GL_TEXTURE_2D, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, 0);
+  glGenRenderbuffers(1, &depth);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
+  const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE)
+    throw RenderError("GlContext: scene texture framebuffer (" + std::to_string(w) + "x" +
+                      std::to_string(h) + ") is " + fboStatusText(status));
+}
 }  // namespace
 
-GlContext::GlContext(int width, int height, bool antiAlias) : width_(width), height_(height) {
+GlContext::GlContext(int width, int height, SceneTarget target)
+    : width_(width), height_(height), target_(target) {
   if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
     throw RenderError("GlContext: invalid frame size " + std::to_string(width) + "x" +
                       std::to_string(height));
@@ -75,10 +99,11 @@ GlContext::GlContext(int width, int height, bool antiAlias) : width_(width), hei
   try {
     makeCurrent();
     const GLsizei w = width, h = height;
-    if (antiAlias) {
+    if (target == SceneTarget::Msaa4) {
       samples_ = 4;
       makeTarget(w, h, samples_, msFbo_, msColor_, msDepth_);
     }
+    if (target == SceneTarget::PostProcess) makeTextureTarget(w, h, sceneFbo_, sceneColorTex_, sceneDepth_);
     makeTarget(w, h, 0, fbo_, color_, depth_);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     if (glGetError() != GL_NO_ERROR) throw RenderError("GlContext: GL error while creating FBOs");
@@ -98,13 +123,15 @@ GlContext::~GlContext() {
 }
 
 void GlContext::destroyFramebuffers() {
-  const unsigned fbos[] = {msFbo_, fbo_};
-  const unsigned rbs[] = {msColor_, msDepth_, color_, depth_};
+  const unsigned fbos[] = {msFbo_, fbo_, sceneFbo_};
+  const unsigned rbs[] = {msColor_, msDepth_, color_, depth_, sceneDepth_};
   for (unsigned f : fbos)
     if (f) glDeleteFramebuffers(1, &f);
   for (unsigned r : rbs)
     if (r) glDeleteRenderbuffers(1, &r);
+  if (sceneColorTex_) glDeleteTextures(1, &sceneColorTex_);
   msFbo_ = msColor_ = msDepth_ = fbo_ = color_ = depth_ = 0;
+  sceneFbo_ = sceneColorTex_ = sceneDepth_ = 0;
 }
 
 void GlContext::makeCurrent() {
@@ -114,28 +141,41 @@ void GlContext::makeCurrent() {
 }
 
 void GlContext::bindDrawTarget() {
-  glBindFramebuffer(GL_FRAMEBUFFER, samples_ > 1 ? msFbo_ : fbo_);
+  const unsigned fbo = target_ == SceneTarget::Msaa4         ? msFbo_
+                       : target_ == SceneTarget::PostProcess ? sceneFbo_
+                                                              : fbo_;
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
   glViewport(0, 0, width_, height_);
 }
 
-void GlContext::readPixels(std::vector<std::uint8_t>& rgba) {
-  if (samples_ > 1) {
-    glBindFramebuffer(GL_READ_FRAMEBUFFER, msFbo_);
-    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
-    glBlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, GL_COLOR_BUFFER_BIT,
-                      GL_NEAREST);
-  }
+void GlContext::resolve() {
+  if (target_ != SceneTarget::Msaa4) return;
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, msFbo_);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo_);
+  glBlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+}
+
+void GlContext::bindFinalTarget() {
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo_);
+  glViewport(0, 0, width_, height_);
+}
+
+void GlContext::readPixels(std::vector<std::uint8_t>& rgba, bool topDown) {
   glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   const std::size_t row = static_cast<std::size_t>(width_) * 4;
   const std::size_t size = row * static_cast<std::size_t>(height_);
-  scratch_.resize(size);
-  glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, scratch_.data());
-  // GL rows are bottom-up; hand out top-down rows.
   rgba.resize(size);
-  for (int y = 0; y < height_; ++y)
-    std::memcpy(rgba.data() + static_cast<std::size_t>(y) * row,
-                scratch_.data() + static_cast<std::size_t>(height_ - 1 - y) * row, row);
+  if (!topDown) {
+    glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  } else {
+    scratch_.resize(size);
+    glReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, scratch_.data());
+    // GL rows are bottom-up; hand out top-down rows.
+    for (int y = 0; y < height_; ++y)
+      std::memcpy(rgba.data() + static_cast<std::size_t>(y) * row,
+                  scratch_.data() + static_cast<std::size_t>(height_ - 1 - y) * row, row);
+  }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   const GLenum err = glGetError();
   if (err != GL_NO_ERROR)

@@ -1,6 +1,10 @@
 // Why: rendering happens without a display. GlContext owns an OSMesa core-profile (>= 3.3) context
-// and the framebuffer objects a frame is drawn into (4x multisampled when anti-aliasing is on,
-// resolved with glBlitFramebuffer), so callers never touch OSMesa or FBO plumbing.
+// and the framebuffer objects a frame is drawn into, so callers never touch OSMesa or FBO
+// plumbing. Three kinds of scene target:
+//   Plain        the scene is drawn straight into the final framebuffer;
+//   Msaa4        a 4x multisampled framebuffer, resolved into the final one (glBlitFramebuffer);
+//   PostProcess  a single-sample framebuffer whose colour is a texture (sceneTexture()) that a
+//                full-screen pass (the renderer's FXAA) reads while drawing the final framebuffer.
 // One GlContext per thread; it is made current on construction and by makeCurrent().
 #pragma once
 #include <cstdint>
@@ -8,11 +12,13 @@
 
 namespace springy::render {
 
+enum class SceneTarget { Plain, Msaa4, PostProcess };
+
 class GlContext {
 public:
   // Throws RenderError if the context or the framebuffers cannot be created.
-  // width, height in 1..16384. antiAlias: 4x MSAA (llvmpipe's maximum).
-  GlContext(int width, int height, bool antiAlias);
+  // width, height in 1..16384. Msaa4: 4 samples is llvmpipe's maximum.
+  GlContext(int width, int height, SceneTarget target);
   ~GlContext();
   GlContext(const GlContext&) = delete;
   GlContext& operator=(const GlContext&) = delete;
@@ -20,15 +26,21 @@ public:
   void makeCurrent();
   int width() const { return width_; }
   int height() const { return height_; }
-  bool antiAlias() const { return samples_ > 1; }
+  SceneTarget target() const { return target_; }
   int samples() const { return samples_; }
 
-  // Binds the framebuffer the scene is drawn into (multisampled when anti-aliasing is on) and
-  // sets the viewport to the full frame.
+  // Binds the framebuffer the scene is drawn into and sets the viewport to the full frame.
   void bindDrawTarget();
-  // Resolves the multisampled buffer (no-op without MSAA) and reads RGBA8 pixels, rows TOP-DOWN,
-  // into rgba (resized to width*height*4).
-  void readPixels(std::vector<std::uint8_t>& rgba);
+  // Msaa4: resolves into the final framebuffer. Other targets: no-op.
+  void resolve();
+  // Binds the final (single-sample, colour only needed) framebuffer and sets the viewport.
+  void bindFinalTarget();
+  // PostProcess: the scene colour texture (0 otherwise).
+  unsigned sceneTexture() const { return sceneColorTex_; }
+  // Reads the final framebuffer as RGBA8 into rgba (resized to width*height*4). topDown: row 0
+  // is the top of the image (one extra copy); otherwise GL's bottom-up order, straight from
+  // glReadPixels.
+  void readPixels(std::vector<std::uint8_t>& rgba, bool topDown);
 
   // Renderer/driver strings, for logs.
   const char* glRenderer() const;
@@ -38,12 +50,14 @@ private:
   void destroyFramebuffers();
   int width_;
   int height_;
+  SceneTarget target_;
   int samples_ = 0;
   void* ctx_ = nullptr;                  // OSMesaContext
   std::vector<std::uint8_t> osmesaBuffer_;  // OSMesa's own (unused) window buffer
   std::vector<std::uint8_t> scratch_;       // bottom-up rows from glReadPixels
   unsigned msFbo_ = 0, msColor_ = 0, msDepth_ = 0;  // multisampled target (AA on)
-  unsigned fbo_ = 0, color_ = 0, depth_ = 0;        // single-sample target / resolve target
+  unsigned fbo_ = 0, color_ = 0, depth_ = 0;        // final framebuffer (Plain: also the scene)
+  unsigned sceneFbo_ = 0, sceneColorTex_ = 0, sceneDepth_ = 0;  // PostProcess scene target
 };
 
 }  // namespace springy::render

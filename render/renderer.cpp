@@ -10,6 +10,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <limits>
+#include <optional>
+#include <string>
 #include <unordered_map>
 
 #include "render/error.hpp"
@@ -43,36 +45,38 @@ void main() {
 }
 )";
 
-constexpr const char* kMeshFs = R"(#version 330 core
+// Compiled in variants (see meshVariantSource): SHADOWS, GROUND and FLAT are preprocessor
+// switches, so a fragment only runs the code its mesh needs (llvmpipe executes both sides of a
+// branch, even on a uniform).
+constexpr const char* kMeshFsBody = R"(
 in vec3 vPos;
 in vec3 vNormal;
 in vec4 vLightPos;
-uniform vec3 uColour;
+uniform vec3 uAlbedo;       // linear colour (ground: colour A)
 uniform float uAlpha;
 uniform float uShininess;
 uniform float uSpecular;
-uniform int uFlat;          // 1: faceted, normals from the triangle's own plane
 uniform vec3 uToLight;      // unit vector towards the light
 uniform vec3 uLightColour;
 uniform vec3 uAmbient;
 uniform vec3 uEye;
-uniform int uShadows;
 uniform sampler2DShadow uShadowMap;
 uniform float uShadowStep;  // PCF tap spacing, shadow-map uv units
-uniform int uGround;
 uniform vec3 uGroundOrigin;
 uniform vec3 uGroundU;
 uniform vec3 uGroundV;
-uniform vec3 uGroundB;
+uniform vec3 uGroundB;      // linear colour B
 uniform float uTile;
 uniform float uGroundExtent;
+uniform vec3 uSkyTop;
+uniform vec3 uSkyBottom;
+uniform float uHeight;
 out vec4 fragColour;
 
-vec3 toLinear(vec3 c) { return pow(max(c, vec3(0.0)), vec3(2.2)); }
 vec3 toDisplay(vec3 c) { return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2)); }
 
+#if SHADOWS
 float shadowFactor() {
-  if (uShadows == 0) return 1.0;
   vec3 p = vLightPos.xyz / vLightPos.w * 0.5 + 0.5;
   if (p.x <= 0.0 || p.x >= 1.0 || p.y <= 0.0 || p.y >= 1.0) return 1.0;
   p.z = min(p.z, 1.0);  // receivers beyond the far plane compare as "far"
@@ -83,36 +87,88 @@ float shadowFactor() {
   s += texture(uShadowMap, vec3(p.xy + vec2(uShadowStep, uShadowStep), p.z));
   return s * 0.25;
 }
+#endif
 
 void main() {
+#if FLAT
+  // Faceted: the screen-space derivatives of the position span the triangle's plane; their
+  // cross product faces the viewer.
+  vec3 n = normalize(cross(dFdx(vPos), dFdy(vPos)));
+#else
   vec3 n = normalize(vNormal);
   if (!gl_FrontFacing) n = -n;  // two-sided lighting
-  // Flat shading: the screen-space derivatives of the position span the triangle's plane;
-  // their cross product faces the viewer.
-  if (uFlat != 0) n = normalize(cross(dFdx(vPos), dFdy(vPos)));
-  vec3 base = uColour;
-  float fog = 0.0;
-  if (uGround != 0) {
-    vec3 d = vPos - uGroundOrigin;
-    vec2 uv = vec2(dot(d, uGroundU), dot(d, uGroundV)) / uTile;
-    // Box-filtered checker: averages to grey where tiles get smaller than a pixel.
-    vec2 w = fwidth(uv) + 1e-4;
-    vec2 i = 2.0 * (abs(fract((uv - 0.5 * w) * 0.5) - 0.5) - abs(fract((uv + 0.5 * w) * 0.5) - 0.5)) / w;
-    base = mix(uColour, uGroundB, 0.5 - 0.5 * i.x * i.y);
-    fog = smoothstep(0.55, 1.0, length(d) / uGroundExtent);
-  }
-  vec3 albedo = toLinear(base);
+#endif
   vec3 l = uToLight;
   float ndl = max(dot(n, l), 0.0);
+#if SHADOWS
   float shadow = ndl > 0.0 ? shadowFactor() : 1.0;
+#else
+  float shadow = 1.0;
+#endif
+  float hemi = 0.75 + 0.25 * n.y;
+#if GROUND
+  vec3 d = vPos - uGroundOrigin;
+  vec2 uv = vec2(dot(d, uGroundU), dot(d, uGroundV)) / uTile;
+  // Box-filtered checker: averages to grey where tiles get smaller than a pixel.
+  vec2 w = fwidth(uv) + 1e-4;
+  vec2 i = 2.0 * (abs(fract((uv - 0.5 * w) * 0.5) - 0.5) - abs(fract((uv + 0.5 * w) * 0.5) - 0.5)) / w;
+  vec3 albedo = mix(uAlbedo, uGroundB, 0.5 - 0.5 * i.x * i.y);
+  float fog = smoothstep(0.55, 1.0, length(d) / uGroundExtent);
+  vec3 lit = albedo * (uAmbient * hemi + uLightColour * ndl * shadow);
+  // The ground fades into the sky towards its edge: the sky's colour at this pixel (as the sky
+  // pass draws it), mixed in here, so the sky is only drawn where nothing else is.
+  float t = clamp((gl_FragCoord.y - 0.5) / max(uHeight - 1.0, 1.0), 0.0, 1.0);
+  fragColour = vec4(mix(toDisplay(lit), mix(uSkyBottom, uSkyTop, t), fog), uAlpha);
+#else
   vec3 v = normalize(uEye - vPos);
   vec3 h = normalize(l + v);
   float spec = ndl > 0.0 ? uSpecular * pow(max(dot(n, h), 0.0), uShininess) : 0.0;
-  float hemi = 0.75 + 0.25 * n.y;
-  vec3 lit = albedo * (uAmbient * hemi + uLightColour * ndl * shadow) + uLightColour * spec * shadow;
-  vec3 colour = toDisplay(lit);
-  // The ground fades out towards its edge (blended over the sky behind it).
-  fragColour = vec4(colour, uAlpha * (1.0 - fog));
+  vec3 lit = uAlbedo * (uAmbient * hemi + uLightColour * ndl * shadow) + uLightColour * spec * shadow;
+  fragColour = vec4(toDisplay(lit), uAlpha);
+#endif
+}
+)";
+
+std::string meshVariantSource(bool shadows, bool ground, bool flat) {
+  return std::string("#version 330 core\n#define SHADOWS ") + (shadows ? "1" : "0") +
+         "\n#define GROUND " + (ground ? "1" : "0") + "\n#define FLAT " + (flat ? "1" : "0") +
+         "\n" + kMeshFsBody;
+}
+
+// FXAA-style anti-aliasing (after Lottes' FXAA, "console" variant): the luma of the 4 diagonal
+// neighbours gives the edge direction; two and four taps along the edge are blended; pixels
+// whose neighbourhood contrast is low keep their exact colour (texelFetch).
+constexpr const char* kFxaaFs = R"(#version 330 core
+uniform sampler2D uScene;
+uniform vec2 uTexel;  // 1 / frame size
+out vec4 fragColour;
+float luma(vec3 c) { return dot(c, vec3(0.299, 0.587, 0.114)); }
+void main() {
+  ivec2 ip = ivec2(gl_FragCoord.xy);
+  ivec2 hi = textureSize(uScene, 0) - 1;
+  vec3 rgbM = texelFetch(uScene, ip, 0).rgb;
+  float lNW = luma(texelFetch(uScene, clamp(ip + ivec2(-1, -1), ivec2(0), hi), 0).rgb);
+  float lNE = luma(texelFetch(uScene, clamp(ip + ivec2(1, -1), ivec2(0), hi), 0).rgb);
+  float lSW = luma(texelFetch(uScene, clamp(ip + ivec2(-1, 1), ivec2(0), hi), 0).rgb);
+  float lSE = luma(texelFetch(uScene, clamp(ip + ivec2(1, 1), ivec2(0), hi), 0).rgb);
+  float lM = luma(rgbM);
+  float lMin = min(lM, min(min(lNW, lNE), min(lSW, lSE)));
+  float lMax = max(lM, max(max(lNW, lNE), max(lSW, lSE)));
+  if (lMax - lMin < max(0.0312, lMax * 0.125)) {  // no edge here: the exact colour
+    fragColour = vec4(rgbM, 1.0);
+    return;
+  }
+  vec2 uv = gl_FragCoord.xy * uTexel;
+  vec2 dir = vec2(-((lNW + lNE) - (lSW + lSE)), (lNW + lSW) - (lNE + lSE));
+  float reduce = max((lNW + lNE + lSW + lSE) * (0.25 / 8.0), 1.0 / 128.0);
+  float rcpDirMin = 1.0 / (min(abs(dir.x), abs(dir.y)) + reduce);
+  dir = clamp(dir * rcpDirMin, vec2(-8.0), vec2(8.0)) * uTexel;
+  vec3 rgbA = 0.5 * (textureLod(uScene, uv + dir * (1.0 / 3.0 - 0.5), 0.0).rgb +
+                     textureLod(uScene, uv + dir * (2.0 / 3.0 - 0.5), 0.0).rgb);
+  vec3 rgbB = rgbA * 0.5 + 0.25 * (textureLod(uScene, uv - dir * 0.5, 0.0).rgb +
+                                   textureLod(uScene, uv + dir * 0.5, 0.0).rgb);
+  float lB = luma(rgbB);
+  fragColour = vec4((lB < lMin || lB > lMax) ? rgbA : rgbB, 1.0);
 }
 )";
 
@@ -129,7 +185,7 @@ constexpr const char* kSkyVs = R"(#version 330 core
 void main() {
   // One triangle covering the screen.
   vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
-  gl_Position = vec4(p, 0.0, 1.0);
+  gl_Position = vec4(p, 1.0, 1.0);  // on the far plane: depth 1, behind everything
 }
 )";
 constexpr const char* kSkyFs = R"(#version 330 core
@@ -225,6 +281,7 @@ public:
   }
   void set(const char* n, int v) { glUniform1i(loc(n), v); }
   void set(const char* n, float v) { glUniform1f(loc(n), v); }
+  void set(const char* n, glm::vec2 v) { glUniform2fv(loc(n), 1, glm::value_ptr(v)); }
   void set(const char* n, glm::vec3 v) { glUniform3fv(loc(n), 1, glm::value_ptr(v)); }
   void set(const char* n, glm::vec4 v) { glUniform4fv(loc(n), 1, glm::value_ptr(v)); }
   void set(const char* n, const glm::mat4& m) {
@@ -282,9 +339,19 @@ void checkTriangles(std::span<const std::uint32_t> tris, std::size_t vertexCount
 struct Renderer::Impl {
   RenderSettings settings;
   GlContext ctx;
-  Program meshProg, depthProg, skyProg, overlayProg;
+  // Mesh shader variants, compiled on first use: index = shadows | ground << 1 | flat << 2.
+  std::optional<Program> meshProgs[8];
+  Program depthProg, skyProg, overlayProg, fxaaProg;
+  // Per frame: which mesh variants got this frame's shared uniforms, and what they are.
+  unsigned framePrepared = 0;
+  struct FrameUniforms {
+    glm::mat4 viewProj{1.0f}, lightVP{1.0f};
+    float normalOffset = 0.0f;
+  } frameUniforms;
+  Program* current = nullptr;
   GLuint emptyVao = 0;
   GLuint shadowFbo = 0, shadowTex = 0;
+  int shadowSize = 0;  // current shadow map size (fitted, at most settings.shadowMapSize)
   GLuint overlayTex = 0;
   int overlayW = 0, overlayH = 0;
   std::vector<std::string> overlayLines;
@@ -298,8 +365,13 @@ struct Renderer::Impl {
   Bounds shadowBounds;
   RenderTimings timings;
 
-  explicit Impl(const RenderSettings& s) : settings(s), ctx(s.width, s.height, s.antiAlias) {
-    meshProg = Program(kMeshVs, kMeshFs, "mesh");
+  static SceneTarget targetFor(const RenderSettings& s) {
+    if (!s.antiAlias) return SceneTarget::Plain;
+    return s.antiAliasMethod == AntiAliasMethod::Msaa4 ? SceneTarget::Msaa4 : SceneTarget::PostProcess;
+  }
+
+  explicit Impl(const RenderSettings& s) : settings(s), ctx(s.width, s.height, targetFor(s)) {
+    if (ctx.target() == SceneTarget::PostProcess) fxaaProg = Program(kSkyVs, kFxaaFs, "FXAA");
     depthProg = Program(kDepthVs, kDepthFs, "shadow depth");
     skyProg = Program(kSkyVs, kSkyFs, "sky");
     overlayProg = Program(kOverlayVs, kOverlayFs, "overlay");
@@ -310,8 +382,9 @@ struct Renderer::Impl {
                           " outside 16..8192");
       glGenTextures(1, &shadowTex);
       glBindTexture(GL_TEXTURE_2D, shadowTex);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, settings.shadowMapSize,
-                   settings.shadowMapSize, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+      shadowSize = settings.shadowMapSize;
+      glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, shadowSize, shadowSize, 0,
+                   GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
       glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
       glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
       glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -430,9 +503,34 @@ struct Renderer::Impl {
 
   bool drawable(const GpuMesh& m) const { return m.visible && m.hasPositions && m.indexCount > 0; }
 
+  // Shadow map texels needed for light-space extent `size` (world units): at the casters'
+  // nearest point to the camera, a texel should cover at most one pixel (the PCF taps blur over
+  // 4 texels anyway; the bounds' corners overestimate a round caster). A power of two in
+  // 256..shadowMapSize; shadowMapSize when fitting is off.
+  int fittedShadowSize(const Bounds& b, float size) const {
+    if (!settings.fitShadowMap) return settings.shadowMapSize;
+    const glm::vec3 centre = 0.5f * (b.lo + b.hi);
+    const float radius = 0.5f * glm::length(b.hi - b.lo);
+    const float distance = std::max(glm::length(centre - camera.position) - radius, camera.nearPlane);
+    const float pixelsPerUnit = static_cast<float>(settings.height) /
+                                (2.0f * distance * std::tan(glm::radians(0.5f * camera.fovYDeg)));
+    const float texels = size * pixelsPerUnit;
+    int n = 256;
+    while (n < settings.shadowMapSize && static_cast<float>(n) < texels) n *= 2;
+    return std::min(n, settings.shadowMapSize);
+  }
+
+  void resizeShadowMap(int n) {
+    if (n == shadowSize) return;
+    glBindTexture(GL_TEXTURE_2D, shadowTex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, n, n, 0, GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+    glBindTexture(GL_TEXTURE_2D, 0);
+    shadowSize = n;
+  }
+
   // Orthographic light frustum around the caster bounds, snapped so that shadows do not shimmer
-  // when the bounds change a little from frame to frame.
-  glm::mat4 lightViewProj(const Bounds& b, float& texelWorld) const {
+  // when the bounds change a little from frame to frame. Sizes the shadow map to fit.
+  glm::mat4 lightViewProj(const Bounds& b, float& texelWorld) {
     const glm::vec3 d = glm::normalize(light.direction);
     const float radius = std::max(0.5f * glm::length(b.hi - b.lo), 1e-3f);
     const glm::vec3 up = std::abs(d.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0);
@@ -447,7 +545,8 @@ struct Renderer::Impl {
     const float pad = 0.05f * radius + 1e-3f;
     float size = std::max(ls.hi.x - ls.lo.x, ls.hi.y - ls.lo.y) + 2.0f * pad;
     size = std::exp2(std::ceil(std::log2(size) * 8.0f) / 8.0f);  // 1/8-octave steps
-    const float texel = size / static_cast<float>(settings.shadowMapSize);
+    resizeShadowMap(fittedShadowSize(b, size));
+    const float texel = size / static_cast<float>(shadowSize);
     glm::vec2 mid(0.5f * (ls.lo.x + ls.hi.x), 0.5f * (ls.lo.y + ls.hi.y));
     mid = glm::floor(mid / texel) * texel;
     texelWorld = texel;
@@ -499,31 +598,78 @@ struct Renderer::Impl {
     overlayDirty = false;
   }
 
+  void use(Program& p) {
+    if (current != &p) p.use(), current = &p;
+  }
+
+  Program& meshProgram(bool shadowsOn, const GpuMesh& m) {
+    const unsigned key = (shadowsOn ? 1u : 0u) | (m.ground ? 2u : 0u) | (m.material.flat && !m.ground ? 4u : 0u);
+    std::optional<Program>& p = meshProgs[key];
+    if (!p) {
+      const std::string fs = meshVariantSource(key & 1u, key & 2u, key & 4u);
+      p.emplace(kMeshVs, fs.c_str(), "mesh");
+    }
+    use(*p);
+    if (!(framePrepared & (1u << key))) {  // this frame's shared uniforms, once per variant
+      framePrepared |= 1u << key;
+      p->set("uViewProj", frameUniforms.viewProj);
+      p->set("uLightViewProj", frameUniforms.lightVP);
+      p->set("uNormalOffset", frameUniforms.normalOffset);
+      p->set("uToLight", -glm::normalize(light.direction));
+      p->set("uLightColour", light.colour);
+      p->set("uAmbient", light.ambient);
+      p->set("uEye", camera.position);
+      p->set("uShadowStep",
+             settings.shadowSoftness / static_cast<float>(std::max(shadowSize, 1)));
+      p->set("uShadowMap", 0);
+      p->set("uSkyTop", skyTop);
+      p->set("uSkyBottom", skyBottom);
+      p->set("uHeight", static_cast<float>(settings.height));
+    }
+    return *p;
+  }
+
+  static glm::vec3 toLinear(glm::vec3 c) { return glm::pow(glm::max(c, glm::vec3(0.0f)), glm::vec3(2.2f)); }
+
   // layerAlpha: a translucent body is drawn as two layers (inside, then outside); each gets the
   // alpha that makes the pair as opaque as material.alpha: 1 - (1 - a')^2 = a.
-  void drawMesh(const GpuMesh& m, bool twoLayers = false) {
+  void drawMesh(bool shadowsOn, const GpuMesh& m, bool twoLayers = false) {
+    Program& p = meshProgram(shadowsOn, m);
     const float alpha = std::clamp(m.material.alpha, 0.0f, 1.0f);
-    meshProg.set("uColour", m.material.colour);
-    meshProg.set("uAlpha", twoLayers ? 1.0f - std::sqrt(1.0f - alpha) : alpha);
-    meshProg.set("uShininess", std::max(m.material.shininess, 1.0f));
-    meshProg.set("uSpecular", m.ground ? 0.0f : m.material.specular);
-    meshProg.set("uFlat", m.material.flat ? 1 : 0);
-    meshProg.set("uGround", m.ground ? 1 : 0);
+    p.set("uAlbedo", toLinear(m.material.colour));
+    p.set("uAlpha", twoLayers ? 1.0f - std::sqrt(1.0f - alpha) : alpha);
     if (m.ground) {
-      meshProg.set("uGroundOrigin", m.groundOrigin);
-      meshProg.set("uGroundU", m.groundU);
-      meshProg.set("uGroundV", m.groundV);
-      meshProg.set("uGroundB", m.groundB);
-      meshProg.set("uTile", m.tile);
-      meshProg.set("uGroundExtent", m.extent);
+      p.set("uGroundOrigin", m.groundOrigin);
+      p.set("uGroundU", m.groundU);
+      p.set("uGroundV", m.groundV);
+      p.set("uGroundB", toLinear(m.groundB));
+      p.set("uTile", m.tile);
+      p.set("uGroundExtent", m.extent);
+    } else {
+      p.set("uShininess", std::max(m.material.shininess, 1.0f));
+      p.set("uSpecular", m.material.specular);
     }
     glBindVertexArray(m.vao);
     glDrawElements(GL_TRIANGLES, m.indexCount, GL_UNSIGNED_INT, nullptr);
   }
 
+  // profilePasses: glFinish, then charge the time since the previous mark to `pass`.
+  Clock::time_point passStart;
+  void mark(RenderPass pass) {
+    if (!settings.profilePasses) return;
+    glFinish();
+    const auto now = Clock::now();
+    timings.passMs[static_cast<std::size_t>(pass)] +=
+        std::chrono::duration<double, std::milli>(now - passStart).count();
+    passStart = now;
+  }
+
   void render() {
     const auto t0 = Clock::now();
+    passStart = t0;
     ctx.makeCurrent();
+    current = nullptr;
+    framePrepared = 0;
     if (overlayDirty) rebuildOverlay();
     const float aspect = static_cast<float>(settings.width) / static_cast<float>(settings.height);
 
@@ -537,7 +683,7 @@ struct Renderer::Impl {
         shadowsOn = true;
         lightVP = lightViewProj(b, texelWorld);
         glBindFramebuffer(GL_FRAMEBUFFER, shadowFbo);
-        glViewport(0, 0, settings.shadowMapSize, settings.shadowMapSize);
+        glViewport(0, 0, shadowSize, shadowSize);
         glEnable(GL_DEPTH_TEST);
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_LESS);
@@ -546,7 +692,7 @@ struct Renderer::Impl {
         glClear(GL_DEPTH_BUFFER_BIT);
         glEnable(GL_POLYGON_OFFSET_FILL);
         glPolygonOffset(1.5f, 2.0f);
-        depthProg.use();
+        use(depthProg);
         depthProg.set("uLightViewProj", lightVP);
         for (const GpuMesh& m : meshes) {
           if (!drawable(m) || m.ground) continue;
@@ -554,37 +700,22 @@ struct Renderer::Impl {
           glDrawElements(GL_TRIANGLES, m.indexCount, GL_UNSIGNED_INT, nullptr);
         }
         glDisable(GL_POLYGON_OFFSET_FILL);
+        mark(RenderPass::Shadow);
       }
     }
+    frameUniforms.viewProj = camera.viewProjection(aspect);
+    frameUniforms.lightVP = lightVP;
+    frameUniforms.normalOffset = 1.5f * texelWorld;
 
-    // Main pass: sky, opaque meshes, translucent meshes back to front, overlay.
+    // Main pass: opaque meshes, grounds, sky, translucent meshes back to front.
     ctx.bindDrawTarget();
     glDisable(GL_DEPTH_TEST);
     glDepthMask(GL_TRUE);
     glClear(GL_DEPTH_BUFFER_BIT);
     glDisable(GL_BLEND);
     glDisable(GL_CULL_FACE);
-    skyProg.use();
-    skyProg.set("uTop", skyTop);
-    skyProg.set("uBottom", skyBottom);
-    skyProg.set("uHeight", static_cast<float>(settings.height));
-    glBindVertexArray(emptyVao);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LEQUAL);
-    meshProg.use();
-    meshProg.set("uViewProj", camera.viewProjection(aspect));
-    meshProg.set("uLightViewProj", lightVP);
-    meshProg.set("uNormalOffset", 1.5f * texelWorld);
-    meshProg.set("uToLight", -glm::normalize(light.direction));
-    meshProg.set("uLightColour", light.colour);
-    meshProg.set("uAmbient", light.ambient);
-    meshProg.set("uEye", camera.position);
-    meshProg.set("uShadows", shadowsOn ? 1 : 0);
-    meshProg.set("uShadowStep",
-                 settings.shadowSoftness / static_cast<float>(std::max(settings.shadowMapSize, 1)));
-    meshProg.set("uShadowMap", 0);
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, shadowTex);
     std::vector<const GpuMesh*> translucent, grounds;
@@ -592,15 +723,25 @@ struct Renderer::Impl {
       if (!drawable(m)) continue;
       if (m.ground) grounds.push_back(&m);
       else if (m.material.alpha < 1.0f) translucent.push_back(&m);
-      else drawMesh(m);
+      else drawMesh(shadowsOn, m);
     }
-    // Grounds after the other opaque meshes: their faded edge blends over what is behind.
+    mark(RenderPass::Opaque);
+    // Grounds (opaque: they mix the sky colour into their faded edge themselves).
     if (!grounds.empty()) {
-      glEnable(GL_BLEND);
-      glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
-      for (const GpuMesh* g : grounds) drawMesh(*g);
-      glDisable(GL_BLEND);
+      for (const GpuMesh* g : grounds) drawMesh(shadowsOn, *g);
+      mark(RenderPass::Ground);
     }
+    // The sky on the far plane, after the opaque meshes: early depth testing leaves out every
+    // pixel something covers (they would be shaded twice otherwise).
+    glDepthMask(GL_FALSE);
+    use(skyProg);
+    skyProg.set("uTop", skyTop);
+    skyProg.set("uBottom", skyBottom);
+    skyProg.set("uHeight", static_cast<float>(settings.height));
+    glBindVertexArray(emptyVao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDepthMask(GL_TRUE);
+    mark(RenderPass::Sky);
     if (!translucent.empty()) {
       auto dist = [&](const GpuMesh* m) {
         return glm::length(0.5f * (m->bounds.lo + m->bounds.hi) - camera.position);
@@ -613,22 +754,38 @@ struct Renderer::Impl {
       glEnable(GL_CULL_FACE);
       for (const GpuMesh* m : translucent) {
         glCullFace(GL_FRONT);  // inside (far) faces first, then the near ones
-        drawMesh(*m, true);
+        drawMesh(shadowsOn, *m, true);
         glCullFace(GL_BACK);
-        drawMesh(*m, true);
+        drawMesh(shadowsOn, *m, true);
       }
       glDisable(GL_CULL_FACE);
       glDepthMask(GL_TRUE);
+      mark(RenderPass::Translucent);
     }
 
+    // Anti-aliasing into the final framebuffer: MSAA resolve or the FXAA pass.
+    glDisable(GL_DEPTH_TEST);
+    ctx.resolve();
+    ctx.bindFinalTarget();
+    if (ctx.target() == SceneTarget::PostProcess) {
+      use(fxaaProg);
+      fxaaProg.set("uScene", 0);
+      fxaaProg.set("uTexel", glm::vec2(1.0f / static_cast<float>(settings.width),
+                                       1.0f / static_cast<float>(settings.height)));
+      glBindTexture(GL_TEXTURE_2D, ctx.sceneTexture());
+      glBindVertexArray(emptyVao);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+    if (ctx.target() != SceneTarget::Plain) mark(RenderPass::AntiAlias);
+
+    // The overlay goes on last, over the anti-aliased frame (its text is already smooth).
     if (overlayW > 0 && overlayH > 0) {
-      glDisable(GL_DEPTH_TEST);
       glEnable(GL_BLEND);
       glBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
       const float margin = std::max(4.0f, static_cast<float>(settings.height) / 90.0f);
       const float W = static_cast<float>(settings.width), H = static_cast<float>(settings.height);
       const float mx = std::round(margin), my = std::round(margin);
-      overlayProg.use();
+      use(overlayProg);
       overlayProg.set("uRect", glm::vec4(-1.0f + 2.0f * mx / W, 1.0f - 2.0f * my / H,
                                          -1.0f + 2.0f * (mx + static_cast<float>(overlayW)) / W,
                                          1.0f - 2.0f * (my + static_cast<float>(overlayH)) / H));
@@ -637,6 +794,7 @@ struct Renderer::Impl {
       glBindVertexArray(emptyVao);
       glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
       glDisable(GL_BLEND);
+      mark(RenderPass::Overlay);
     }
     glBindVertexArray(0);
     glFinish();
@@ -669,7 +827,12 @@ void Renderer::updateDynamicMesh(MeshId id, std::span<const float> positions) {
   impl_->ctx.makeCurrent();
   GpuMesh& m = impl_->mesh(id);
   if (!m.dynamic) throw RenderError("Renderer: mesh " + std::to_string(id) + " is not dynamic");
+  const auto t0 = Clock::now();
   impl_->setPositions(m, positions);
+  if (impl_->settings.profilePasses) {
+    glFinish();
+    impl_->timings.passMs[static_cast<std::size_t>(RenderPass::Upload)] += msSince(t0);
+  }
 }
 
 MeshId Renderer::addStaticMesh(std::span<const float> positions,
@@ -769,10 +932,25 @@ void Renderer::setOverlayText(std::vector<std::string> lines) {
 
 void Renderer::render() { impl_->render(); }
 
-void Renderer::readPixels(std::vector<std::uint8_t>& rgba) {
+const char* passName(RenderPass pass) {
+  switch (pass) {
+    case RenderPass::Upload: return "upload";
+    case RenderPass::Shadow: return "shadow map";
+    case RenderPass::Sky: return "sky";
+    case RenderPass::Opaque: return "opaque meshes";
+    case RenderPass::Ground: return "ground";
+    case RenderPass::Translucent: return "translucent meshes";
+    case RenderPass::AntiAlias: return "anti-aliasing";
+    case RenderPass::Overlay: return "overlay";
+    case RenderPass::Count: break;
+  }
+  return "?";
+}
+
+void Renderer::readPixels(std::vector<std::uint8_t>& rgba, RowOrder order) {
   const auto t0 = Clock::now();
   impl_->ctx.makeCurrent();
-  impl_->ctx.readPixels(rgba);
+  impl_->ctx.readPixels(rgba, order == RowOrder::TopDown);
   impl_->timings.readbackMs = msSince(t0);
   impl_->timings.totalReadbackMs += impl_->timings.readbackMs;
   ++impl_->timings.readbacks;

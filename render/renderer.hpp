@@ -6,6 +6,7 @@
 // Threading: a Renderer and its GL context belong to the thread that created it.
 // Colours are display (sRGB-like) values in 0..1; lighting is done in linear space.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
@@ -16,6 +17,7 @@
 
 #include "render/camera.hpp"
 #include "render/mesh_builders.hpp"
+#include "render/row_order.hpp"
 #include "render/text.hpp"
 
 namespace springy::render {
@@ -37,25 +39,48 @@ struct Light {
   glm::vec3 ambient{0.28f, 0.30f, 0.34f};  // linear ambient (hemispherical: less from below)
 };
 
+// How edges are anti-aliased when RenderSettings::antiAlias is on.
+//  Fxaa  post-process (FXAA-style: luma-edge detection, blend along the edge); one full-screen
+//        pass on a single-sample frame. On llvmpipe several times cheaper than MSAA.
+//  Msaa4 4 samples per pixel, resolved by a blit: geometric edges only, 4x the raster work.
+enum class AntiAliasMethod { Fxaa, Msaa4 };
+
 struct RenderSettings {
   int width = 1280;           // frame size; must be even for H.264 video
   int height = 720;
-  bool antiAlias = true;      // 4x MSAA
+  bool antiAlias = true;      // see antiAliasMethod
+  AntiAliasMethod antiAliasMethod = AntiAliasMethod::Fxaa;
   bool shadows = true;        // false: no shadow pass at all
-  int shadowMapSize = 2048;   // square depth texture, texels
+  int shadowMapSize = 2048;   // square depth texture, texels (the maximum when fitted)
+  // Fit the shadow map to the casters' size on screen: the smallest power of two (>= 256) whose
+  // texels cover at most one pixel where the casters are nearest the camera. A ball filling a
+  // third of a 720p frame's height gets 1024, not 2048 (4x fewer depth texels to rasterise).
+  bool fitShadowMap = true;
   float shadowSoftness = 1.0f;  // PCF tap spacing in shadow-map texels
   std::string fontPath = kDefaultFontPath;  // overlay font (loaded only if overlay text is set)
   float overlayPixelHeight = 0.0f;  // 0: height / 36, at least 12 px
+  // Measure each pass (glFinish after each): fills RenderTimings::passMs. Costs a little speed
+  // (the passes no longer overlap inside the driver); for profiling only.
+  bool profilePasses = false;
 };
 
+// The passes of one frame, in order, for RenderSettings::profilePasses.
+enum class RenderPass { Upload, Shadow, Opaque, Ground, Sky, Translucent, AntiAlias, Overlay, Count };
+const char* passName(RenderPass pass);
+inline constexpr std::size_t kRenderPassCount = static_cast<std::size_t>(RenderPass::Count);
+
 struct RenderTimings {
-  double renderMs = 0.0;    // last render() (GL work finished: glFinish included)
-  double readbackMs = 0.0;  // last readPixels() (MSAA resolve + glReadPixels + row flip)
+  double renderMs = 0.0;    // last render() (GL work finished: glFinish included; includes the
+                            // anti-aliasing pass, FXAA or MSAA resolve)
+  double readbackMs = 0.0;  // last readPixels() (glReadPixels, plus the row flip if top-down)
   double totalRenderMs = 0.0;
   double totalReadbackMs = 0.0;
   std::uint64_t frames = 0;
   std::uint64_t readbacks = 0;
+  // profilePasses only: total ms per pass over all frames (Upload = dynamic vertex uploads).
+  double passMs[kRenderPassCount] = {};
 };
+
 
 using MeshId = std::uint32_t;
 
@@ -109,7 +134,8 @@ public:
   // --- Frames.
   void render();
   // The last rendered frame as RGBA8, rows TOP-DOWN (row 0 = top of the image), alpha 255.
-  void readPixels(std::vector<std::uint8_t>& rgba);
+  // BottomUp: GL's own order, one copy less (the video encoder flips for free).
+  void readPixels(std::vector<std::uint8_t>& rgba, RowOrder order = RowOrder::TopDown);
   Image readImage();
 
   const RenderTimings& timings() const;

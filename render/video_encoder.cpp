@@ -10,6 +10,7 @@ extern "C" {
 
 #include <algorithm>
 #include <chrono>
+#include <cstddef>
 #include <mutex>
 
 #include "render/error.hpp"
@@ -184,7 +185,7 @@ struct VideoEncoder::Impl {
     }
   }
 
-  void writeFrame(std::span<const std::uint8_t> rgba) {
+  void writeFrame(std::span<const std::uint8_t> rgba, RowOrder order) {
     if (!codec) throw RenderError("VideoEncoder::writeFrame: encoder is not open");
     const std::size_t expected =
         static_cast<std::size_t>(settings.width) * static_cast<std::size_t>(settings.height) * 4;
@@ -194,8 +195,12 @@ struct VideoEncoder::Impl {
     const auto t0 = Clock::now();
     int ret = av_frame_make_writable(frame);  // the encoder may still hold the previous buffer
     if (ret < 0) fail("cannot make the frame writable", ret);
-    const std::uint8_t* src[1] = {rgba.data()};
-    const int srcStride[1] = {settings.width * 4};
+    // Bottom-up rows: start at the last row and step backwards (a negative stride).
+    const std::ptrdiff_t row = static_cast<std::ptrdiff_t>(settings.width) * 4;
+    const std::uint8_t* src[1] = {order == RowOrder::TopDown
+                                      ? rgba.data()
+                                      : rgba.data() + row * (settings.height - 1)};
+    const int srcStride[1] = {order == RowOrder::TopDown ? settings.width * 4 : -settings.width * 4};
     sws_scale(sws, src, srcStride, 0, settings.height, frame->data, frame->linesize);
     frame->pts = nextPts++;
     const double convert = msSince(t0);
@@ -248,7 +253,9 @@ void VideoEncoder::open(const std::string& path, int width, int height, int fps,
   impl_->open(path, s);
 }
 bool VideoEncoder::isOpen() const { return impl_->codec != nullptr; }
-void VideoEncoder::writeFrame(std::span<const std::uint8_t> rgba) { impl_->writeFrame(rgba); }
+void VideoEncoder::writeFrame(std::span<const std::uint8_t> rgba, RowOrder order) {
+  impl_->writeFrame(rgba, order);
+}
 void VideoEncoder::finish() { impl_->finish(); }
 std::string VideoEncoder::codecName() const { return impl_->codecName; }
 bool VideoEncoder::usingFallback() const { return impl_->fallback; }

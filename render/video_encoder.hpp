@@ -10,6 +10,8 @@
 #include <span>
 #include <string>
 
+#include "render/row_order.hpp"
+
 namespace springy::render {
 
 struct VideoSettings {
@@ -46,8 +48,9 @@ public:
             const std::string& preset = "veryfast");
   bool isOpen() const;
 
-  // One RGBA8 frame, rows top-down, width*height*4 bytes.
-  void writeFrame(std::span<const std::uint8_t> rgba);
+  // One RGBA8 frame, width*height*4 bytes, rows top-down (or bottom-up, as glReadPixels gives
+  // them: flipped during the colour conversion at no cost).
+  void writeFrame(std::span<const std::uint8_t> rgba, RowOrder order = RowOrder::TopDown);
   // Flushes the encoder and writes the trailer. After it the encoder is closed.
   void finish();
 

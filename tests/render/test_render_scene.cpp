@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "render/camera.hpp"
 #include "render/error.hpp"
@@ -38,10 +39,19 @@ void dump(const Image& img, const std::string& name) {
 
 }  // namespace
 
-class UniformSky : public ::testing::TestWithParam<bool> {};
+enum class Aa { None, Fxaa, Msaa };
+RenderSettings withAa(RenderSettings s, Aa aa) {
+  s.antiAlias = aa != Aa::None;
+  s.antiAliasMethod = aa == Aa::Msaa ? AntiAliasMethod::Msaa4 : AntiAliasMethod::Fxaa;
+  return s;
+}
+std::string aaName(Aa aa) { return aa == Aa::None ? "NoAA" : aa == Aa::Fxaa ? "FXAA" : "MSAA"; }
 
+class UniformSky : public ::testing::TestWithParam<Aa> {};
+
+// Anti-aliasing must not touch flat areas: every pixel keeps the exact sky colour.
 TEST_P(UniformSky, EveryPixelIsTheSkyColour) {
-  Renderer r(small(64, 48, GetParam()));
+  Renderer r(withAa(small(64, 48), GetParam()));
   const glm::vec3 sky(100.0f / 255.0f, 150.0f / 255.0f, 200.0f / 255.0f);
   r.setSky(sky, sky);
   r.render();
@@ -55,8 +65,8 @@ TEST_P(UniformSky, EveryPixelIsTheSkyColour) {
     ASSERT_EQ(rgba[i + 3], 255) << "pixel " << i / 4;
   }
 }
-INSTANTIATE_TEST_SUITE_P(RenderScene, UniformSky, ::testing::Values(false, true),
-                         [](const auto& p) { return p.param ? "MSAA" : "NoAA"; });
+INSTANTIATE_TEST_SUITE_P(RenderScene, UniformSky, ::testing::Values(Aa::None, Aa::Fxaa, Aa::Msaa),
+                         [](const auto& p) { return aaName(p.param); });
 
 TEST(RenderScene, GradientSkyTopRowIsTopColour) {
   Renderer r(small());
@@ -113,9 +123,12 @@ protected:
   Light light;
   Camera cam;
 
-  Image renderScene(bool shadows, bool aa) {
+  Image renderScene(bool shadows, bool aa, AntiAliasMethod method = AntiAliasMethod::Fxaa,
+                    RenderTimings* timings = nullptr) {
     RenderSettings s = small(W, H, aa);
+    s.antiAliasMethod = method;
     s.shadows = shadows;
+    s.profilePasses = timings != nullptr;
     Renderer r(s);
     light.direction = {-0.2f, -1.0f, -0.1f};
     light.colour = glm::vec3(1.0f);
@@ -130,6 +143,7 @@ protected:
     m.specular = 0.0f;
     r.addStaticMesh(makeSphere(sphereCentre, 0.5f, 24, 48), m);
     r.render();
+    if (timings) *timings = r.timings();
     return r.readImage();
   }
 
@@ -147,7 +161,7 @@ protected:
 };
 
 TEST_F(KnownScene, BodyColourShadowAndGroundLevel) {
-  const Image img = renderScene(true, true);
+  const Image img = renderScene(true, true);  // FXAA
   dump(img, "known_scene.png");
   // The sphere centre projects onto the sphere: its colour, scaled by lighting (hue preserved).
   const glm::vec3 c = projectToPixel(cam, sphereCentre, W, H);
@@ -181,9 +195,20 @@ TEST_F(KnownScene, NoShadowsWhenDisabled) {
   EXPECT_NEAR(luminance(shadowed), luminance(want), 6.0f);
 }
 
-TEST_F(KnownScene, AntiAliasingSoftensEdges) {
-  // Count pixels that are neither sphere-like nor ground-like along the silhouette: MSAA adds
-  // intermediate colours, so more distinct values appear.
+TEST_F(KnownScene, NoShadowPassWhenDisabled) {
+  RenderTimings on, off;
+  renderScene(true, false, AntiAliasMethod::Fxaa, &on);
+  renderScene(false, false, AntiAliasMethod::Fxaa, &off);
+  const auto shadow = static_cast<std::size_t>(RenderPass::Shadow);
+  EXPECT_GT(on.passMs[shadow], 0.0);
+  EXPECT_EQ(off.passMs[shadow], 0.0);
+}
+
+class KnownSceneAa : public KnownScene, public ::testing::WithParamInterface<AntiAliasMethod> {};
+
+TEST_P(KnownSceneAa, AntiAliasingSoftensEdges) {
+  // Count pixels that are neither sphere-like nor ground-like along the silhouette: anti-aliasing
+  // adds intermediate colours, so more distinct values appear.
   auto distinct = [](const Image& img) {
     std::vector<bool> seen(1 << 15, false);
     int n = 0;
@@ -193,9 +218,45 @@ TEST_F(KnownScene, AntiAliasingSoftensEdges) {
     }
     return n;
   };
-  const Image aa = renderScene(true, true), plain = renderScene(true, false);
+  const Image aa = renderScene(true, true, GetParam()), plain = renderScene(true, false);
+  dump(aa, "known_scene_aa.png");
   EXPECT_GT(distinct(aa), distinct(plain));
 }
+
+// Along the sphere's left and right silhouette (against the ground) a row of the plain frame
+// steps from ground to sphere between two neighbouring pixels. With anti-aliasing, one of those
+// two pixels takes a colour in between: its red-minus-green ("sphere-ness") lies well inside
+// the step.
+TEST_P(KnownSceneAa, EdgePixelsGetIntermediateColours) {
+  const Image aa = renderScene(false, true, GetParam()), plain = renderScene(false, false);
+  dump(aa, "edges_aa.png");
+  auto sphereness = [&](const Image& img, int x, int y) {
+    const glm::vec3 p = pixel(img.rgba, W, x, y);
+    return p.r - p.g;  // ground: ~0 (grey), sphere: large
+  };
+  const int cy = static_cast<int>(projectToPixel(cam, sphereCentre, W, H).y);
+  int crossings = 0, blended = 0;
+  for (int y = cy - 8; y <= cy + 8; ++y)
+    for (int x = 0; x + 1 < W; ++x) {
+      const float a = sphereness(plain, x, y), b = sphereness(plain, x + 1, y);
+      if (std::abs(a - b) < 60.0f) continue;  // not a silhouette step
+      ++crossings;
+      const float lo = std::min(a, b), hi = std::max(a, b), margin = 0.15f * (hi - lo);
+      for (int k : {x, x + 1}) {
+        const float v = sphereness(aa, k, y);
+        if (v > lo + margin && v < hi - margin) {
+          ++blended;
+          break;
+        }
+      }
+    }
+  EXPECT_GE(crossings, 30);  // 17 rows, 2 sides
+  EXPECT_GE(blended, crossings * 6 / 10) << blended << " of " << crossings << " steps blended";
+}
+
+INSTANTIATE_TEST_SUITE_P(RenderScene, KnownSceneAa,
+                         ::testing::Values(AntiAliasMethod::Fxaa, AntiAliasMethod::Msaa4),
+                         [](const auto& p) { return p.param == AntiAliasMethod::Fxaa ? "FXAA" : "MSAA"; });
 
 TEST(RenderScene, TranslucentBodyShowsWhatIsBehind) {
   RenderSettings s = small(96, 64);

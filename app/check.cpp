@@ -47,7 +47,7 @@ int runCheck(const CheckOptions& options) {
       continue;
     }
     const auto wallStart = std::chrono::steady_clock::now();
-    World world(buildModel(scene), scene.integrator, stepSize(scene));
+    World world = makeWorld(scene, options.overrides);
     MonitorLimits limits;
     limits.minVolume = options.minVolume;
     Monitor monitor(world, limits);
@@ -58,7 +58,7 @@ int runCheck(const CheckOptions& options) {
     for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
       std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
     }
-    std::printf("], collide: %s\n", world.collides() ? "yes" : "no");
+    std::printf("], collide: %s, threads: %u\n", world.collides() ? "yes" : "no", world.threads());
     // Sample at the render frame rate: the states a video would show are the ones checked.
     const double frame = 1.0 / scene.render.fps;
     const long frames = std::lround(scene.duration / frame);

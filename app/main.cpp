@@ -32,6 +32,11 @@ void addRunOverrides(CLI::App* cmd, springy::RunOverrides& o) {
       },
       "Steps of dt/N per dt, or 'auto': the stability advisor's safe number");
   cmd->add_option("--duration", o.duration, "Override the simulated duration [s]");
+  cmd->add_option("--threads", o.threads,
+                  "Simulation threads (default: $SPRINGY_THREADS, else all cores; models under " +
+                      std::to_string(springy::World::kMinVerticesPerThread) +
+                      " vertices per thread use fewer). Results are identical for every count.")
+      ->check(CLI::Range(1u, 256u));
 }
 
 #ifdef SPRINGY_HAVE_RENDER

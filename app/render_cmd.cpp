@@ -88,7 +88,7 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   SceneDesc scene = loadSceneWith(path, options.overrides);
   applyRenderOverrides(scene, options.render);
   AtomicFile output(outPath);  // an unwritable target fails here, before any simulation
-  World world(buildModel(scene), scene.integrator, stepSize(scene));
+  World world = makeWorld(scene, options.overrides);
   Monitor monitor(world);
   render::RenderSettings rs = renderSettingsOf(scene);
   rs.profilePasses = envFlag("SPRINGY_RENDER_PROFILE");
@@ -285,7 +285,7 @@ int framesOne(const std::string& path, const FramesOptions& options) {
   }
   fs::create_directories(options.output);
   const std::string stem = fs::path(path).stem().string();
-  World world(buildModel(scene), scene.integrator, stepSize(scene));
+  World world = makeWorld(scene, options.overrides);
   Monitor monitor(world);
   SceneView view(scene, world, renderSettingsOf(scene));
   std::vector<render::Image> stills;

@@ -4,6 +4,7 @@
 
 #include "app/commands.h"
 #include "sim/error.h"
+#include "sim/parallel.h"
 
 namespace springy {
 
@@ -26,6 +27,12 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
   }
   if (advise) adviseTimeStep(path, scene, overrides.autoSubsteps, std::cerr);
   return scene;
+}
+
+World makeWorld(const SceneDesc& scene, const RunOverrides& overrides) {
+  World world(buildModel(scene), scene.integrator, stepSize(scene));
+  world.setThreads(overrides.threads ? *overrides.threads : defaultThreadCount());
+  return world;
 }
 
 std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time) {

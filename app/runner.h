@@ -16,11 +16,17 @@ struct RunOverrides {
   std::optional<double> dt, duration;
   std::optional<int> substeps;
   bool autoSubsteps = false;  // --substeps auto: the stability advisor picks them
+  std::optional<unsigned> threads;  // --threads (default: SPRINGY_THREADS, else every core)
 };
 
 // Loads a scene and applies the overrides. Throws springy::Error. advise: run the stability
 // advisor (warn on stderr when the step exceeds its estimate; pick --substeps auto).
 SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise = true);
+
+// The scene's world, stepping on the requested threads (World::setThreads: small models stay
+// on one; results are bit-identical for every count). Throws springy::Error for a bad
+// SPRINGY_THREADS.
+World makeWorld(const SceneDesc& scene, const RunOverrides& overrides);
 
 // Steps `world` until `time` (within half a step), checking the monitor after the last step.
 // Returns the failure, if any.

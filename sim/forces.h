@@ -5,6 +5,7 @@
 #include <cstddef>
 
 #include "sim/model.h"
+#include "sim/parallel.h"
 
 namespace springy {
 
@@ -19,5 +20,12 @@ void applyDrag(const Model& model, std::size_t begin, std::size_t end, const Vec
 // is pushed along -n with force c A ((w - v_face) . n) n, split equally over its corners.
 void applyWindPressure(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* x,
                        const Vec3* v, Vec3* f);
+// The same for the listed faces, adding only to the corners whose bit is set in the mask.
+void applyWindPressureOwned(const Model& model, const ElementRef* list, std::size_t count, const Vec3& air,
+                       const Vec3* x, const Vec3* v, Vec3* f);
+// Gravity and drag for the listed vertices only (a thread's own vertices).
+void applyGravityOwned(const Model& model, const uint32_t* vertices, std::size_t count, Vec3* f);
+void applyDragOwned(const Model& model, const uint32_t* vertices, std::size_t count, const Vec3& air, const Vec3* v,
+               Vec3* f);
 
 }  // namespace springy

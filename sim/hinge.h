@@ -26,6 +26,7 @@
 #include <cstddef>
 
 #include "sim/model.h"
+#include "sim/parallel.h"
 
 namespace springy {
 
@@ -48,8 +49,25 @@ double dihedralAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3&
 // theta - theta0 wrapped into (-pi, pi], so a hinge folded through +-pi is not kicked by 2 pi.
 double angleDifference(double theta, double restAngle);
 
+// Per-hinge constants the force kernel derives once from a Hinge (World keeps them beside the
+// hinges): cos and sin of the rest angle, so the kernel gets theta - theta0 without atan2 in the
+// common case, and the lever-arm bounds squared and inverted (infinity when unbounded).
+struct HingeTerms {
+  double restCos, restSin;
+  double minLeverSquared[2];
+  double invMinLever[2];
+};
+HingeTerms hingeTerms(const Hinge& hinge);
+
 // Accumulates the forces of hinges [begin, end) into f. Degenerate hinges are skipped for the
 // instant (the stated guard; they are rejected at load when degenerate at rest).
+void applyHinges(const Hinge* hinges, const HingeTerms* terms, std::size_t begin, std::size_t end, const Vec3* x,
+                 const Vec3* v, Vec3* f);
+// The same for the listed hinges, adding only to the vertices whose bit is set in the
+// reference's mask (a thread's share, sim/parallel.h).
+void applyHingesOwned(const Hinge* hinges, const HingeTerms* terms, const ElementRef* list, std::size_t count,
+                 const Vec3* x, const Vec3* v, Vec3* f);
+// Convenience for a few hinges without cached terms (tests, tools): derives them on the fly.
 void applyHinges(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f);
 
 // Elastic energy 1/2 k (theta - theta0)^2 summed over hinges [begin, end).

@@ -9,11 +9,16 @@
 #include <cstddef>
 
 #include "sim/model.h"
+#include "sim/parallel.h"
 
 namespace springy {
 
 // Accumulates the forces of struts [begin, end) into f.
 void applyStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f);
+// The same for the listed struts, adding only to the ends whose bit is set in the reference's
+// mask (bit 0: i, bit 1: j; a thread's share, sim/parallel.h).
+void applyStrutsOwned(const Strut* struts, const ElementRef* list, std::size_t count, const Vec3* x, const Vec3* v,
+                 Vec3* f);
 
 // Elastic energy 1/2 k (l - l0)^2 summed over struts [begin, end).
 double strutEnergy(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x);

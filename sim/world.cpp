@@ -1,6 +1,7 @@
 #include "sim/world.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 
@@ -22,11 +23,6 @@ constexpr IntegratorEntry kIntegrators[] = {
     {Integrator::RK4, "rk4"},
     {Integrator::BackwardEuler, "backward_euler"},
 };
-
-// y = a + s b over a whole array.
-void axpy(std::vector<Vec3>& y, const std::vector<Vec3>& a, double s, const std::vector<Vec3>& b) {
-  for (std::size_t i = 0; i < y.size(); ++i) y[i] = a[i] + b[i] * s;
-}
 
 }  // namespace
 
@@ -89,6 +85,74 @@ World::World(Model model, Integrator integrator, double dt)
   if (integrator_ == Integrator::VelocityVerlet || integrator_ == Integrator::Leapfrog) vs_.assign(n, Vec3{});
   if (integrator_ == Integrator::VelocityVerlet) aNext_.assign(n, Vec3{});
   if (integrator_ == Integrator::BackwardEuler) implicit_ = std::make_unique<ImplicitSolver>(model_);
+  hingeTerms_.reserve(model_.hinges.size());
+  for (const Hinge& h : model_.hinges) hingeTerms_.push_back(hingeTerms(h));
+}
+
+void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
+  const std::size_t n = model_.vertexCount();
+  unsigned threads = std::max(1u, requested);
+  if (minVerticesPerThread > 0) {
+    threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(1, n / minVerticesPerThread)));
+  }
+  threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(1, n)));
+  pool_.reset();
+  shares_.clear();
+  if (threads <= 1) return;
+
+  // Owners: slabs of equal vertex count along the longest axis of the rest shape's box (ties
+  // broken by index, so the split is a pure function of the model).
+  Vec3 lo = model_.restPosition[0], hi = lo;
+  for (const Vec3& p : model_.restPosition) {
+    lo = componentMin(lo, p);
+    hi = componentMax(hi, p);
+  }
+  const Vec3 extent = hi - lo;
+  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+  std::vector<uint32_t> order(n);
+  for (uint32_t i = 0; i < n; ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const double pa = model_.restPosition[a][axis], pb = model_.restPosition[b][axis];
+    return pa < pb || (pa == pb && a < b);
+  });
+  std::vector<uint8_t> owner(n);
+  for (std::size_t k = 0; k < n; ++k) owner[order[k]] = static_cast<uint8_t>(k * threads / n);
+
+  shares_.resize(threads);
+  for (uint32_t i = 0; i < n; ++i) shares_[owner[i]].vertices.push_back(i);
+  // Each thread lists, in index order, the elements with at least one vertex it owns.
+  const auto distribute = [&](auto&& vertexOf, std::size_t count, int corners, auto member) {
+    for (std::size_t e = 0; e < count; ++e) {
+      for (unsigned t = 0; t < threads; ++t) {
+        uint32_t mask = 0;
+        for (int c = 0; c < corners; ++c) {
+          if (owner[vertexOf(e, c)] == t) mask |= 1u << c;
+        }
+        if (mask != 0) (shares_[t].*member).push_back({static_cast<uint32_t>(e), mask});
+      }
+    }
+  };
+  distribute([&](std::size_t e, int c) { return c == 0 ? model_.struts[e].i : model_.struts[e].j; },
+             model_.struts.size(), 2, &Share::struts);
+  distribute([&](std::size_t e, int c) { return model_.hinges[e].v[c]; }, model_.hinges.size(), 4, &Share::hinges);
+  if (model_.wind) {
+    distribute([&](std::size_t e, int c) { return model_.faces[e][static_cast<std::size_t>(c)]; }, model_.faces.size(),
+               3, &Share::faces);
+  }
+  pool_ = std::make_unique<ThreadPool>(threads);
+}
+
+double World::redundancy() const {
+  if (!pool_) return 1.0;
+  std::size_t listed = 0, total = model_.struts.size() + model_.hinges.size();
+  for (const Share& share : shares_) listed += share.struts.size() + share.hinges.size();
+  return total == 0 ? 1.0 : static_cast<double>(listed) / static_cast<double>(total);
+}
+
+template <class F>
+void World::forVertices(F&& fn) const {
+  if (pool_) pool_->forRange(model_.vertexCount(), fn);
+  else fn(std::size_t{0}, model_.vertexCount());
 }
 
 World::~World() = default;
@@ -105,96 +169,155 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
 }
 
 void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const {
+  const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
+  if (pool_) {
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, nullptr); });
+    return;
+  }
   const std::size_t n = model_.vertexCount();
   std::fill(f, f + n, Vec3{});
-  const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
   for (ForceStage stage : forceStages_) {
     switch (stage) {
       case ForceStage::Gravity: applyGravity(model_, 0, n, f); break;
       case ForceStage::Drag: applyDrag(model_, 0, n, air, v, f); break;
       case ForceStage::Wind: applyWindPressure(model_, 0, model_.faces.size(), air, x, v, f); break;
       case ForceStage::Struts: applyStruts(model_.struts.data(), 0, model_.struts.size(), x, v, f); break;
-      case ForceStage::Hinges: applyHinges(model_.hinges.data(), 0, model_.hinges.size(), x, v, f); break;
+      case ForceStage::Hinges:
+        applyHinges(model_.hinges.data(), hingeTerms_.data(), 0, model_.hinges.size(), x, v, f);
+        break;
     }
   }
 }
 
+void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f, Vec3* a) const {
+  // The same stages in the same order as the one-threaded loop, restricted to this thread's
+  // vertices: each vertex receives the same terms in the same order.
+  const Share& share = shares_[thread];
+  for (uint32_t i : share.vertices) f[i] = Vec3{};
+  for (ForceStage stage : forceStages_) {
+    switch (stage) {
+      case ForceStage::Gravity: applyGravityOwned(model_, share.vertices.data(), share.vertices.size(), f); break;
+      case ForceStage::Drag: applyDragOwned(model_, share.vertices.data(), share.vertices.size(), air, v, f); break;
+      case ForceStage::Wind: applyWindPressureOwned(model_, share.faces.data(), share.faces.size(), air, x, v, f); break;
+      case ForceStage::Struts: applyStrutsOwned(model_.struts.data(), share.struts.data(), share.struts.size(), x, v, f); break;
+      case ForceStage::Hinges:
+        applyHingesOwned(model_.hinges.data(), hingeTerms_.data(), share.hinges.data(), share.hinges.size(), x, v, f);
+        break;
+    }
+  }
+  if (a != nullptr) {
+    for (uint32_t i : share.vertices) a[i] = f[i] * model_.invMass[i];
+  }
+}
+
 void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
-  computeForces(x, v, t, forceScratch_.data());
+  Vec3* f = forceScratch_.data();
+  if (pool_) {
+    const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, a); });
+    return;
+  }
+  computeForces(x, v, t, f);
   const std::size_t n = model_.vertexCount();
-  for (std::size_t i = 0; i < n; ++i) a[i] = forceScratch_[i] * model_.invMass[i];  // pinned: invMass 0
+  for (std::size_t i = 0; i < n; ++i) a[i] = f[i] * model_.invMass[i];  // pinned: invMass 0
 }
 
 void World::step() {
-  const std::size_t n = model_.vertexCount();
   const double dt = dt_, t = time_;
   if (!model_.colliders.empty()) xOld_ = x_;
+  Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data();
 
   switch (integrator_) {
     case Integrator::ExplicitEuler:
-      accelerations(x_.data(), v_.data(), t, a_.data());
-      for (std::size_t i = 0; i < n; ++i) {
-        x_[i] += v_[i] * dt;
-        v_[i] += a_[i] * dt;
-      }
+      accelerations(x, v, t, a);
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          x[i] += v[i] * dt;
+          v[i] += a[i] * dt;
+        }
+      });
       break;
     case Integrator::SymplecticEuler:
-      accelerations(x_.data(), v_.data(), t, a_.data());
-      for (std::size_t i = 0; i < n; ++i) {
-        v_[i] += a_[i] * dt;
-        x_[i] += v_[i] * dt;
-      }
+      accelerations(x, v, t, a);
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          v[i] += a[i] * dt;
+          x[i] += v[i] * dt;
+        }
+      });
       break;
-    case Integrator::VelocityVerlet:
+    case Integrator::VelocityVerlet: {
       // a(t) is the a(t + dt) of the previous step unless contact changed the velocities since.
-      if (!cachedAccelerationValid_) accelerations(x_.data(), v_.data(), t, a_.data());
-      for (std::size_t i = 0; i < n; ++i) {
-        x_[i] += v_[i] * dt + a_[i] * (0.5 * dt * dt);
-        vs_[i] = v_[i] + a_[i] * dt;  // velocity predictor for the velocity-dependent forces
-      }
-      accelerations(x_.data(), vs_.data(), t + dt, aNext_.data());
-      for (std::size_t i = 0; i < n; ++i) {
-        v_[i] += (a_[i] + aNext_[i]) * (0.5 * dt);
-        a_[i] = aNext_[i];
-      }
+      Vec3 *vs = vs_.data(), *aNext = aNext_.data();
+      if (!cachedAccelerationValid_) accelerations(x, v, t, a);
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          x[i] += v[i] * dt + a[i] * (0.5 * dt * dt);
+          vs[i] = v[i] + a[i] * dt;  // velocity predictor for the velocity-dependent forces
+        }
+      });
+      accelerations(x, vs, t + dt, aNext);
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          v[i] += (a[i] + aNext[i]) * (0.5 * dt);
+          a[i] = aNext[i];
+        }
+      });
       cachedAccelerationValid_ = true;
       break;
-    case Integrator::Leapfrog:
+    }
+    case Integrator::Leapfrog: {
       // Forces at both ends of the step. The closing kick needs a(t + dt) at the velocity
       // v(t + dt), which it is about to compute; the half-step velocity plus the first half
       // kick once more predicts it to O(dt^2), which keeps the scheme second order when the
       // forces depend on velocity (dampers, drag). With position-only forces it is exact KDK.
-      accelerations(x_.data(), v_.data(), t, a_.data());
-      for (std::size_t i = 0; i < n; ++i) {
-        v_[i] += a_[i] * (0.5 * dt);           // kick
-        x_[i] += v_[i] * dt;                   // drift
-        vs_[i] = v_[i] + a_[i] * (0.5 * dt);   // predicted v(t + dt)
-      }
-      accelerations(x_.data(), vs_.data(), t + dt, a_.data());
-      for (std::size_t i = 0; i < n; ++i) v_[i] += a_[i] * (0.5 * dt);  // kick
+      Vec3* vs = vs_.data();
+      accelerations(x, v, t, a);
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          v[i] += a[i] * (0.5 * dt);          // kick
+          x[i] += v[i] * dt;                  // drift
+          vs[i] = v[i] + a[i] * (0.5 * dt);   // predicted v(t + dt)
+        }
+      });
+      accelerations(x, vs, t + dt, a);
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) v[i] += a[i] * (0.5 * dt);  // kick
+      });
       break;
+    }
     case Integrator::RK4: {
       // k1 = f(y), k2 = f(y + dt/2 k1), k3 = f(y + dt/2 k2), k4 = f(y + dt k3); the position
       // slopes are the stage velocities, the velocity slopes the stage accelerations.
+      Vec3 *k1x = k1x_.data(), *k1v = k1v_.data(), *k2x = k2x_.data(), *k2v = k2v_.data();
+      Vec3 *k3x = k3x_.data(), *k3v = k3v_.data(), *k4v = k4v_.data(), *xs = xs_.data(), *vs = vs_.data();
+      // Stage state y + h k for the next evaluation; the stage's velocity is also its position
+      // slope, kept in kx.
+      const auto stageState = [&](double h, const Vec3* kx, const Vec3* kv, Vec3* nextKx) {
+        forVertices([&](std::size_t begin, std::size_t end) {
+          for (std::size_t i = begin; i < end; ++i) {
+            xs[i] = x[i] + kx[i] * h;
+            vs[i] = v[i] + kv[i] * h;
+            if (nextKx != nullptr) nextKx[i] = vs[i];
+          }
+        });
+      };
       k1x_ = v_;
-      accelerations(x_.data(), v_.data(), t, k1v_.data());
-      axpy(xs_, x_, 0.5 * dt, k1x_);
-      axpy(vs_, v_, 0.5 * dt, k1v_);
-      k2x_ = vs_;
-      accelerations(xs_.data(), vs_.data(), t + 0.5 * dt, k2v_.data());
-      axpy(xs_, x_, 0.5 * dt, k2x_);
-      axpy(vs_, v_, 0.5 * dt, k2v_);
-      k3x_ = vs_;
-      accelerations(xs_.data(), vs_.data(), t + 0.5 * dt, k3v_.data());
-      axpy(xs_, x_, dt, k3x_);
-      axpy(vs_, v_, dt, k3v_);
-      accelerations(xs_.data(), vs_.data(), t + dt, k4v_.data());
+      accelerations(x, v, t, k1v);
+      stageState(0.5 * dt, k1x, k1v, k2x);
+      accelerations(xs, vs, t + 0.5 * dt, k2v);
+      stageState(0.5 * dt, k2x, k2v, k3x);
+      accelerations(xs, vs, t + 0.5 * dt, k3v);
+      stageState(dt, k3x, k3v, nullptr);
+      accelerations(xs, vs, t + dt, k4v);
       const double w = dt / 6.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        // k4x = vs_ (the fourth stage's velocity).
-        x_[i] += (k1x_[i] + (k2x_[i] + k3x_[i]) * 2.0 + vs_[i]) * w;
-        v_[i] += (k1v_[i] + (k2v_[i] + k3v_[i]) * 2.0 + k4v_[i]) * w;
-      }
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          // k4x = vs (the fourth stage's velocity).
+          x[i] += (k1x[i] + (k2x[i] + k3x[i]) * 2.0 + vs[i]) * w;
+          v[i] += (k1v[i] + (k2v[i] + k3v[i]) * 2.0 + k4v[i]) * w;
+        }
+      });
       break;
     }
     case Integrator::BackwardEuler:
@@ -208,15 +331,18 @@ void World::step() {
 
 void World::collide() {
   const Colliders& colliders = model_.colliders;
-  bool touched = false;
-  const std::size_t n = model_.vertexCount();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (model_.invMass[i] == 0.0) continue;  // pinned
-    const bool hit = colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
-    sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
-    touched = touched || hit;
-  }
-  if (touched) cachedAccelerationValid_ = false;
+  std::atomic<bool> touched{false};
+  forVertices([&](std::size_t begin, std::size_t end) {
+    bool hitAny = false;
+    for (std::size_t i = begin; i < end; ++i) {
+      if (model_.invMass[i] == 0.0) continue;  // pinned
+      const bool hit = colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
+      sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
+      hitAny = hitAny || hit;
+    }
+    if (hitAny) touched.store(true, std::memory_order_relaxed);
+  });
+  if (touched.load(std::memory_order_relaxed)) cachedAccelerationValid_ = false;
 }
 
 }  // namespace springy

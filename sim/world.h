@@ -9,7 +9,11 @@
 // nothing per step.
 //
 // Model (immutable) and state (positions, velocities, time) are separate; all scratch space
-// (force buffers, integrator stages) is allocated once here, never inside a step.
+// (force buffers, integrator stages, threads' work lists) is allocated once here, never
+// inside a step.
+//
+// Threads (setThreads): force evaluation is split by vertex ownership and the per-vertex loops
+// by index ranges (sim/parallel.h), so every thread count gives bit-identical results.
 #pragma once
 
 #include <cstdint>
@@ -18,7 +22,9 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/hinge.h"
 #include "sim/model.h"
+#include "sim/parallel.h"
 
 namespace springy {
 
@@ -53,6 +59,16 @@ class World {
   // Advances the state by one step of dt.
   void step();
 
+  // Runs the step on up to `requested` threads (the calling thread included). Fewer are used
+  // when the model has under `minVerticesPerThread` vertices per thread, where the handover
+  // would cost more than it saves; results are bit-identical for every count.
+  static constexpr std::size_t kMinVerticesPerThread = 1500;
+  void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread);
+  unsigned threads() const { return pool_ ? pool_->size() : 1; }
+  // Elements evaluated per force evaluation over all threads, divided by the element count:
+  // 1 with one thread, slightly above with more (elements on a boundary between threads).
+  double redundancy() const;
+
   // Total force on every vertex for a given state and time, running the stage list.
   void computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const;
 
@@ -73,7 +89,19 @@ class World {
 
  private:
   void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const;
+  // One thread's share of a force evaluation: the forces on its own vertices (and, when a is
+  // not null, their accelerations).
+  void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f, Vec3* a) const;
+  // Runs fn(begin, end) over [0, vertexCount) split among the threads.
+  template <class F>
+  void forVertices(F&& fn) const;
   void collide();
+
+  // A thread's share: the vertices it owns and the elements that touch them.
+  struct Share {
+    std::vector<uint32_t> vertices;
+    std::vector<ElementRef> struts, hinges, faces;
+  };
 
   Model model_;
   Integrator integrator_;
@@ -89,6 +117,9 @@ class World {
   int restingSteps_ = 0;                // contact within this many steps is resting contact
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
+  std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel
+  std::unique_ptr<ThreadPool> pool_;           // null: one thread
+  std::vector<Share> shares_;                  // one per thread when pool_ is set
 };
 
 }  // namespace springy

@@ -212,5 +212,47 @@ TEST(Hinge, CrushedFaceGivesFiniteRestoringForce) {
   EXPECT_LT(length(sum), 1e-9 * length(f[2]));
 }
 
+TEST(Hinge, FastKernelMatchesTheReferenceFormulas) {
+  // The force kernel rearranges hingeGeometry's formulas for speed (unnormalised normals, the
+  // angle difference from its sine and cosine, a series for small differences). Compared with
+  // the reference f_i = -(k (theta - theta0) + d dtheta/dt) g_i over random hinges bent a
+  // little (series branch), a lot (atan2 branch), across +-pi, and with a crushed wing (lever
+  // guard), it must agree to rounding.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int seriesCases = 0, atanCases = 0, guardCases = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const double rest = 3.0 * u(rng);
+    const std::vector<Vec3> restX = test::hingePositions(rest);
+    HingeGeometry g0;
+    ASSERT_TRUE(hingeGeometry(restX[0], restX[1], restX[2], restX[3], g0));
+    const Hinge h{{0, 1, 2, 3}, g0.theta, 2.0 + u(rng), 0.5 + 0.4 * u(rng), {0.2 * g0.leverLeft, 0.2 * g0.leverRight}};
+    const double bend = trial % 3 == 0 ? 0.2 * u(rng) : 2.5 * u(rng);
+    std::vector<Vec3> x = test::hingePositions(rest + bend), v(4);
+    for (Vec3& p : x) p += Vec3{u(rng), u(rng), u(rng)} * 0.05;
+    for (Vec3& w : v) w = Vec3{u(rng), u(rng), u(rng)};
+    if (trial % 50 == 0) x[2] = x[0] + (x[1] - x[0]) * 0.4 + Vec3{0, 1e-3, 1e-3} * u(rng);  // crushed
+    HingeGeometry g;
+    ASSERT_TRUE(hingeGeometry(x[0], x[1], x[2], x[3], g, h.minLever[0], h.minLever[1]));
+    const double delta = angleDifference(g.theta, h.restAngle);
+    (std::fabs(delta) < 0.24 ? seriesCases : atanCases)++;
+    if (g.leverLeft < h.minLever[0]) guardCases++;
+    double rate = 0.0;
+    for (int i = 0; i < 4; ++i) rate += dot(g.grad[i], v[static_cast<std::size_t>(i)]);
+    const double torque = h.stiffness * delta + h.damping * rate;
+    std::vector<Vec3> f(4);
+    applyHinges(&h, 0, 1, x.data(), v.data(), f.data());
+    double scale = 0.0;
+    for (int i = 0; i < 4; ++i) scale = std::max(scale, length(g.grad[i] * torque));
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_LT(length(f[static_cast<std::size_t>(i)] + g.grad[i] * torque), 1e-12 * scale + 1e-300)
+          << "trial " << trial << " vertex " << i << " delta " << delta;
+    }
+  }
+  EXPECT_GT(seriesCases, 500);
+  EXPECT_GT(atanCases, 500);
+  EXPECT_GT(guardCases, 10);
+}
+
 }  // namespace
 }  // namespace springy

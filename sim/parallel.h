@@ -1,0 +1,81 @@
+// springy: splitting a step over threads with results bit-identical to one thread.
+//
+// Floating-point addition is not associative, so the order in which a vertex's force terms are
+// added decides the last bits of the result. springy fixes that order once for all thread
+// counts: every vertex sums its terms stage by stage, and within a stage in element index
+// order, exactly as the one-threaded loop does. Threads get it by owning vertices, not
+// elements (the "owner computes" rule):
+//   - the vertices are split into one slab per thread along the longest axis of the rest
+//     shape's bounding box, so each thread's vertices are a compact region;
+//   - each thread walks, in index order, the elements that touch a vertex it owns, and adds an
+//     element's force only to the vertices it owns (ElementRef::mask); an element across a slab
+//     boundary is evaluated by each thread that owns one of its vertices (a few percent of
+//     the work, measured in docs/benchmarks.md);
+//   - no two threads ever write the same vertex, so there are no atomics and no locks, and each
+//     vertex sees the same terms in the same order as with one thread.
+// Per-vertex loops (integrator updates, collisions) are split into contiguous index ranges;
+// they are independent per vertex and need no ordering at all.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+namespace springy {
+
+// One element (strut, hinge or face) in a thread's work list: its index, and which of its
+// vertices the thread owns (bit i for the element's i-th vertex).
+struct ElementRef {
+  uint32_t index;
+  uint32_t mask;
+};
+
+// A fixed set of worker threads that run one function on every thread and wait for all of
+// them (fork-join). The calling thread is thread 0 and takes part; workers spin briefly
+// between jobs (a step issues several in a row) and then sleep on a futex.
+class ThreadPool {
+ public:
+  explicit ThreadPool(unsigned threads);
+  ~ThreadPool();
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+
+  unsigned size() const { return threads_; }
+
+  // Runs fn(t) for every t in [0, size()), t = 0 on the calling thread; returns when all are
+  // done. fn must not throw.
+  template <class F>
+  void run(F&& fn) {
+    if (threads_ == 1) {
+      fn(0u);
+      return;
+    }
+    dispatch([](void* ctx, unsigned t) { (*static_cast<F*>(ctx))(t); }, &fn);
+  }
+
+  // Splits [0, n) into size() contiguous ranges and runs fn(begin, end) for each.
+  template <class F>
+  void forRange(std::size_t n, F&& fn) {
+    run([&](unsigned t) { fn(n * t / threads_, n * (t + 1) / threads_); });
+  }
+
+ private:
+  using Job = void (*)(void*, unsigned);
+  void dispatch(Job job, void* ctx);
+  void worker(unsigned index);
+
+  unsigned threads_;
+  std::vector<std::thread> workers_;
+  Job job_ = nullptr;
+  void* ctx_ = nullptr;
+  std::atomic<uint32_t> generation_{0};
+  std::atomic<uint32_t> pending_{0};
+  std::atomic<bool> stop_{false};
+};
+
+// Threads to use when the user gives none: SPRINGY_THREADS if set, else the hardware's count.
+unsigned defaultThreadCount();
+
+}  // namespace springy

@@ -9,6 +9,7 @@
 #include "app/atomic_file.h"
 #include "app/commands.h"
 #include "app/runner.h"
+#include "sim/implicit.h"
 #include "sim/error.h"
 
 namespace springy {
@@ -89,6 +90,15 @@ int runCheck(const CheckOptions& options) {
         std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
                     r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
       }
+    }
+    if (const ImplicitSolver* solver = world.implicitSolver()) {
+      const ImplicitStats& st = solver->stats();
+      const double steps = static_cast<double>(std::max<uint64_t>(st.steps, 1));
+      std::printf("  implicit: %.2f Newton iterations and %.1f CG iterations per step, %llu contacts in the solve, "
+                  "%llu steps retried as halves, %llu unconverged\n",
+                  static_cast<double>(st.newtonIterations) / steps, static_cast<double>(st.cgIterations) / steps,
+                  static_cast<unsigned long long>(st.contactConstraints),
+                  static_cast<unsigned long long>(st.halvedSteps), static_cast<unsigned long long>(st.unconvergedSteps));
     }
     if (!failure && options.endVolume > 0.0) {
       for (uint32_t b = 0; b < world.model().bodies.size() && !failure; ++b) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/colliders.h"
 #include "sim/hinge.h"
 #include "sim/world.h"
 
@@ -165,6 +166,11 @@ ImplicitSolver::ImplicitSolver(const Model& model, ImplicitSettings settings) : 
   v0_.assign(n_, Vec3{});
   vTrial_.assign(n_, Vec3{});
   for (Eigen::VectorXd* vec : {&rhs_, &dv_, &r_, &z_, &p_, &q_, &precond_, &filter_}) vec->setZero(dim);
+  contacts_.reserve(n_);
+  xSaved_.assign(static_cast<std::size_t>(settings_.maxHalvings), std::vector<Vec3>(n_));
+  vSaved_.assign(static_cast<std::size_t>(settings_.maxHalvings), std::vector<Vec3>(n_));
+  contactNormal_.assign(n_, Vec3{});
+  contactSpeed_.assign(n_, 0.0);
   for (std::size_t i = 0; i < n_; ++i) {
     for (int c = 0; c < 3; ++c) filter_(static_cast<Eigen::Index>(3 * i) + c) = model.invMass[i] == 0.0 ? 0.0 : 1.0;
   }
@@ -221,6 +227,35 @@ void ImplicitSolver::assemble(const Model& model, const Vec3* x, const Vec3* v, 
   }
 }
 
+void ImplicitSolver::project(Eigen::VectorXd& vec) const {
+  vec.array() *= filter_.array();
+  for (uint32_t i : contacts_) {
+    const Eigen::Index k = static_cast<Eigen::Index>(3 * i);
+    const Vec3& n = contactNormal_[i];
+    const double along = vec(k) * n.x + vec(k + 1) * n.y + vec(k + 2) * n.z;
+    vec(k) -= along * n.x;
+    vec(k + 1) -= along * n.y;
+    vec(k + 2) -= along * n.z;
+  }
+}
+
+void ImplicitSolver::findContacts(const World& world, const std::vector<Vec3>& x0, double t, double dt) {
+  contacts_.clear();
+  const Model& model = world.model();
+  if (model.colliders.empty()) return;
+  world.computeForces(x0.data(), v0_.data(), t, f_.data());
+  ContactHit hit;
+  for (uint32_t i = 0; i < n_; ++i) {
+    if (model.invMass[i] == 0.0) continue;
+    const Vec3 predicted = x0[i] + (v0_[i] + f_[i] * (model.invMass[i] * dt)) * dt;
+    if (!model.colliders.firstHit(x0[i], predicted, hit)) continue;
+    contacts_.push_back(i);
+    contactNormal_[i] = hit.normal;
+    contactSpeed_[i] = dot(hit.point - x0[i], hit.normal) / dt;  // lands it on the surface
+  }
+  stats_.contactConstraints += contacts_.size();
+}
+
 double ImplicitSolver::residual(const World& world, const std::vector<Vec3>& x0, const std::vector<Vec3>& v, double t,
                                 double dt) {
   const Model& model = world.model();
@@ -228,11 +263,9 @@ double ImplicitSolver::residual(const World& world, const std::vector<Vec3>& x0,
   world.computeForces(x1_.data(), v.data(), t + dt, f_.data());
   for (std::size_t i = 0; i < n_; ++i) {
     const Vec3 r = (v[i] - v0_[i]) * model.mass[i] - f_[i] * dt;  // R = M (v - v0) - h f
-    for (int c = 0; c < 3; ++c) {
-      const Eigen::Index k = static_cast<Eigen::Index>(3 * i) + c;
-      rhs_(k) = -r[c] * filter_(k);
-    }
+    for (int c = 0; c < 3; ++c) rhs_(static_cast<Eigen::Index>(3 * i) + c) = -r[c];
   }
+  project(rhs_);
   return rhs_.norm();
 }
 
@@ -240,6 +273,7 @@ int ImplicitSolver::solveCg(double absoluteFloor) {
   dv_.setZero();
   r_ = rhs_;
   z_ = precond_.cwiseProduct(r_);
+  project(z_);
   p_ = z_;
   double rz = r_.dot(z_);
   const double threshold = std::max(settings_.cgTolerance * r_.norm(), absoluteFloor);
@@ -247,13 +281,14 @@ int ImplicitSolver::solveCg(double absoluteFloor) {
   for (; it < settings_.maxCg; ++it) {
     if (!(r_.norm() > threshold)) break;
     q_.noalias() = A_ * p_;
-    q_.array() *= filter_.array();
+    project(q_);
     const double pq = p_.dot(q_);
     if (!(pq > 0.0)) break;  // not positive definite along p (cannot happen with the definite K)
     const double alpha = rz / pq;
     dv_ += alpha * p_;
     r_ -= alpha * q_;
     z_ = precond_.cwiseProduct(r_);
+    project(z_);
     const double rzNew = r_.dot(z_);
     p_ = z_ + (rzNew / rz) * p_;
     rz = rzNew;
@@ -262,9 +297,32 @@ int ImplicitSolver::solveCg(double absoluteFloor) {
 }
 
 bool ImplicitSolver::step(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt) {
+  ++stats_.steps;
+  return stepWithin(world, x, v, t, dt, 0);
+}
+
+bool ImplicitSolver::stepWithin(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt,
+                                int depth) {
+  if (depth < settings_.maxHalvings) {
+    xSaved_[static_cast<std::size_t>(depth)] = x;
+    vSaved_[static_cast<std::size_t>(depth)] = v;
+  }
+  if (solve(world, x, v, t, dt) || depth >= settings_.maxHalvings) return true;
+  // Newton did not converge (a hinge folding through its wrap, a violent contact): retry the
+  // step as two halves from the saved state.
+  ++stats_.halvedSteps;
+  x = xSaved_[static_cast<std::size_t>(depth)];
+  v = vSaved_[static_cast<std::size_t>(depth)];
+  return stepWithin(world, x, v, t, 0.5 * dt, depth + 1) && stepWithin(world, x, v, t + 0.5 * dt, 0.5 * dt, depth + 1);
+}
+
+bool ImplicitSolver::solve(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt) {
   const Model& model = world.model();
   for (std::size_t i = 0; i < n_; ++i) v0_[i] = v[i];
-  ++stats_.steps;
+  findContacts(world, x, t, dt);
+  // The initial guess v0 already obeys the contacts (each lands on its surface); every Newton
+  // update is then filtered, so they hold exactly throughout.
+  for (uint32_t i : contacts_) v[i] += contactNormal_[i] * (contactSpeed_[i] - dot(v[i], contactNormal_[i]));
   double rnorm = residual(world, x, v, t, dt);
   const double r0 = rnorm;
   bool converged = !(r0 > 0.0);
@@ -295,10 +353,19 @@ bool ImplicitSolver::step(const World& world, std::vector<Vec3>& x, std::vector<
       if (trial < rnorm || ls == 5 || !std::isfinite(trial)) break;
       alpha *= 0.5;
     }
-    for (std::size_t i = 0; i < n_; ++i) v[i] = vTrial_[i];
+    double update = 0.0, speed = 0.0;
+    for (std::size_t i = 0; i < n_; ++i) {
+      update = std::max(update, length(vTrial_[i] - v[i]));
+      v[i] = vTrial_[i];
+      speed = std::max(speed, length(v[i]));
+    }
     rnorm = trial;
     if (!std::isfinite(rnorm)) break;
-    converged = rnorm <= settings_.newtonTolerance * r0;
+    // Converged: the residual fell by newtonTolerance, or the update is a negligible velocity
+    // (the linearisation with the definite Jacobian converges only linearly in compressed
+    // states, where the residual may stall far below any physical significance).
+    converged = rnorm <= settings_.newtonTolerance * r0 ||
+                update <= settings_.velocityTolerance * (speed + length(model.gravity) * dt);
   }
   if (!converged) ++stats_.unconvergedSteps;
   for (std::size_t i = 0; i < n_; ++i) x[i] += v[i] * dt;

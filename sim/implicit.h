@@ -27,8 +27,16 @@
 // Tamstorf & Grinspun 2013, "Discrete bending forces and their Jacobians" (their eq. for the
 // Hessian of the dihedral angle), in the form that matches springy's gradient.
 //
-// Collisions are not part of the solve: World runs its collide stage after this step as it
-// does after every explicit integrator. No allocation inside a step: every buffer and the
+// Contact inside the solve: with a large step, projecting a vertex back onto a collider after
+// the step would move it by up to a step's travel (0.23 m for 14 m/s at 1/60 s) against its
+// springs and inject their energy. So, before the solve, every vertex whose predicted path
+// (x0 + h (v0 + h a0), a0 from the explicit forces) hits a collider gets a constraint: its
+// end-of-step velocity along the hit normal n is the one that lands it on the surface,
+// v1 . n = ((p - x0) . n) / h. Newton starts from a guess that obeys the constraints and
+// filters every update as for pinned vertices (Baraff & Witkin section 5.3: their prescribed
+// change z, applied once to the guess), so the springs respond to the contact within the
+// implicit step. World's collide stage still runs
+// after the step and applies restitution and friction to what arrives. No allocation inside a step: every buffer and the
 // matrix pattern are sized in the constructor.
 #pragma once
 
@@ -63,25 +71,30 @@ bool hingeJacobian(const Hinge& hinge, const Vec3* x, const Vec3* v, Matrix12& d
 
 struct ImplicitSettings {
   int maxNewton = 10;           // Newton iterations per step
-  double newtonTolerance = 1e-9;  // stop when max |dv| <= tol * (max |v| + vScale)
+  double newtonTolerance = 1e-9;  // stop when |R| <= tol |R_0| ...
+  double velocityTolerance = 1e-4;  // ... or max |dv| <= tol (max |v| + |g| dt)
   int maxCg = 1000;             // CG iterations per Newton iteration
   double cgTolerance = 1e-10;   // relative residual of the preconditioned CG
+  int maxHalvings = 3;          // an unconverged step is retried as two halves, this deep
 };
 
 struct ImplicitStats {
   uint64_t steps = 0;
   uint64_t newtonIterations = 0;
   uint64_t cgIterations = 0;
-  uint64_t unconvergedSteps = 0;  // Newton stopped at maxNewton
+  uint64_t unconvergedSteps = 0;  // Newton stopped at maxNewton (also counts retried halves)
+  uint64_t halvedSteps = 0;       // steps (or halves) retried as two halves
+  uint64_t contactConstraints = 0;  // vertex contacts imposed inside the solve
 };
 
 class ImplicitSolver {
  public:
   explicit ImplicitSolver(const Model& model, ImplicitSettings settings = {});
 
-  // Advances x, v (the World's state) by dt. Returns false if Newton did not converge within
-  // maxNewton iterations (the last iterate is kept; a non-finite state is left for the
-  // stability monitor to report).
+  // Advances x, v (the World's state) by dt. When Newton does not converge within maxNewton
+  // iterations the step is retried as two half steps, recursively up to maxHalvings deep;
+  // returns false if even the smallest pieces did not converge (their last iterate is kept;
+  // a non-finite state is left for the stability monitor to report).
   bool step(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
 
   // Assembles K = df/dx and D = df/dv over all struts, hinges and drag at (x, v).
@@ -97,10 +110,18 @@ class ImplicitSolver {
   };
   Block findBlock(uint32_t a, uint32_t b) const;
   static void addBlock(Eigen::SparseMatrix<double>& m, const Block& blk, const Eigen::Matrix3d& values, double scale);
+  bool stepWithin(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt, int depth);
+  // One backward Euler step by Newton's method; returns whether it converged.
+  bool solve(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
   // Evaluates rhs_ = -R(v) (filtered) for the step from x0; returns |R|.
   double residual(const World& world, const std::vector<Vec3>& x0, const std::vector<Vec3>& v, double t, double dt);
   // Solves A dv = rhs_ by filtered Jacobi-preconditioned CG; returns the iteration count.
   int solveCg(double absoluteFloor);
+  // Removes the constrained components of a vector: pinned vertices entirely, contact vertices
+  // along their contact normal.
+  void project(Eigen::VectorXd& vec) const;
+  // Finds the vertices whose predicted path hits a collider and sets their constraints.
+  void findContacts(const World& world, const std::vector<Vec3>& x0, double t, double dt);
 
   ImplicitSettings settings_;
   ImplicitStats stats_;
@@ -112,6 +133,10 @@ class ImplicitSolver {
   // Workspace.
   std::vector<Vec3> x1_, f_, v0_, vTrial_;
   Eigen::VectorXd rhs_, dv_, r_, z_, p_, q_, precond_, filter_;
+  std::vector<std::vector<Vec3>> xSaved_, vSaved_;  // state before each halving level
+  std::vector<uint32_t> contacts_;     // vertices with a contact constraint this step
+  std::vector<Vec3> contactNormal_;    // per vertex (meaningful for contacts_)
+  std::vector<double> contactSpeed_;   // prescribed v1 . n per vertex
 };
 
 }  // namespace springy

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sim/colliders.h"
 #include "sim/hinge.h"
@@ -353,12 +354,16 @@ bool ImplicitSolver::solve(const World& world, std::vector<Vec3>& x, std::vector
       if (trial < rnorm || ls == 5 || !std::isfinite(trial)) break;
       alpha *= 0.5;
     }
+    // The size of the full Newton update (not the damped one the line search took: a tiny
+    // alpha is no sign of convergence).
     double update = 0.0, speed = 0.0;
     for (std::size_t i = 0; i < n_; ++i) {
-      update = std::max(update, length(vTrial_[i] - v[i]));
+      const Eigen::Index k = static_cast<Eigen::Index>(3 * i);
+      update = std::max(update, length(Vec3{dv_(k), dv_(k + 1), dv_(k + 2)}));
       v[i] = vTrial_[i];
       speed = std::max(speed, length(v[i]));
     }
+    if (alpha < 1.0) update = std::numeric_limits<double>::infinity();
     rnorm = trial;
     if (!std::isfinite(rnorm)) break;
     // Converged: the residual fell by newtonTolerance, or the update is a negligible velocity

@@ -98,6 +98,8 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
   threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(1, n)));
   pool_.reset();
   shares_.clear();
+  owner_.clear();
+  threadForces_.clear();
   if (threads <= 1) return;
 
   // Owners: slabs of equal vertex count along the longest axis of the rest shape's box (ties
@@ -115,8 +117,10 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
     const double pa = model_.restPosition[a][axis], pb = model_.restPosition[b][axis];
     return pa < pb || (pa == pb && a < b);
   });
-  std::vector<uint8_t> owner(n);
+  owner_.assign(n, 0);
+  std::vector<uint8_t>& owner = owner_;
   for (std::size_t k = 0; k < n; ++k) owner[order[k]] = static_cast<uint8_t>(k * threads / n);
+  threadForces_.assign(threads, std::vector<Vec3>(n));
 
   shares_.resize(threads);
   for (uint32_t i = 0; i < n; ++i) shares_[owner[i]].vertices.push_back(i);
@@ -171,7 +175,8 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
 void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const {
   const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
   if (pool_) {
-    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, nullptr); });
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air); });
+    gatherForces(f, false);
     return;
   }
   const std::size_t n = model_.vertexCount();
@@ -189,10 +194,11 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
   }
 }
 
-void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f, Vec3* a) const {
+void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air) const {
   // The same stages in the same order as the one-threaded loop, restricted to this thread's
   // vertices: each vertex receives the same terms in the same order.
   const Share& share = shares_[thread];
+  Vec3* f = threadForces_[thread].data();
   for (uint32_t i : share.vertices) f[i] = Vec3{};
   for (ForceStage stage : forceStages_) {
     switch (stage) {
@@ -205,18 +211,25 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
         break;
     }
   }
-  if (a != nullptr) {
-    for (uint32_t i : share.vertices) a[i] = f[i] * model_.invMass[i];
-  }
+}
+
+void World::gatherForces(Vec3* out, bool toAcceleration) const {
+  pool_->forRange(model_.vertexCount(), [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3& f = threadForces_[owner_[i]][i];
+      out[i] = toAcceleration ? f * model_.invMass[i] : f;
+    }
+  });
 }
 
 void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
-  Vec3* f = forceScratch_.data();
   if (pool_) {
     const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
-    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, a); });
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air); });
+    gatherForces(a, true);
     return;
   }
+  Vec3* f = forceScratch_.data();
   computeForces(x, v, t, f);
   const std::size_t n = model_.vertexCount();
   for (std::size_t i = 0; i < n; ++i) a[i] = f[i] * model_.invMass[i];  // pinned: invMass 0

@@ -89,9 +89,12 @@ class World {
 
  private:
   void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const;
-  // One thread's share of a force evaluation: the forces on its own vertices (and, when a is
-  // not null, their accelerations).
-  void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f, Vec3* a) const;
+  // One thread's share of a force evaluation: the forces on its own vertices, summed into its
+  // private buffer (threadForces_[thread]), so no cache line is written by two threads.
+  void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air) const;
+  // Forces of every vertex from the threads' buffers, times `scale` (1 or the inverse masses),
+  // written by index ranges.
+  void gatherForces(Vec3* out, bool toAcceleration) const;
   // Runs fn(begin, end) over [0, vertexCount) split among the threads.
   template <class F>
   void forVertices(F&& fn) const;
@@ -120,6 +123,8 @@ class World {
   std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
+  std::vector<uint8_t> owner_;                 // owning thread of each vertex
+  mutable std::vector<std::vector<Vec3>> threadForces_;  // per thread, full size (own entries used)
 };
 
 }  // namespace springy

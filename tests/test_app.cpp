@@ -2,6 +2,8 @@
 // complete or absent.
 #include <gtest/gtest.h>
 
+#include "run_springy.h"
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -13,21 +15,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status;
-  std::string output;  // stdout and stderr
-};
-
-Result run(const std::string& args) {
-  const std::string command = std::string(SPRINGY_BINARY) + " " + args + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
-  Result r{-1, ""};
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe.get())) r.output += buffer.data();
-  const int raw = pclose(pipe.release());
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
-}
+using Result = springy::test::CommandResult;
+Result run(const std::string& args) { return springy::test::runSpringy(args); }
 
 std::string data(const std::string& name) { return std::string(SPRINGY_SOURCE_DIR) + "/tests/data/app/" + name; }
 

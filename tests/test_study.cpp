@@ -3,6 +3,8 @@
 // substeps that make an unstable scene run.
 #include <gtest/gtest.h>
 
+#include "run_springy.h"
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -16,21 +18,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int status;
-  std::string output;  // stdout and stderr
-};
-
-Result run(const std::string& args) {
-  const std::string command = std::string(SPRINGY_BINARY) + " " + args + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
-  Result r{-1, ""};
-  std::array<char, 4096> buffer;
-  while (fgets(buffer.data(), buffer.size(), pipe.get())) r.output += buffer.data();
-  const int raw = pclose(pipe.release());
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
-}
+using Result = springy::test::CommandResult;
+Result run(const std::string& args) { return springy::test::runSpringy(args); }
 
 const std::string kUnstable = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/app/unstable.toml";
 

@@ -17,6 +17,7 @@ packages=(
   libx264-dev            # pulled in by libavcodec; listed so H.264 is never missing
   libgtest-dev libgmock-dev   # tests
   libbenchmark-dev       # benchmarks
+  libbullet-dev          # benchmarks: the peer comparison (Bullet soft bodies, bench/bullet)
   gnuplot-nox            # plots in the accuracy study
 )
 SUDO=""

@@ -60,9 +60,11 @@ class World {
   void step();
 
   // Runs the step on up to `requested` threads (the calling thread included). Fewer are used
-  // when the model has under `minVerticesPerThread` vertices per thread, where the handover
-  // would cost more than it saves; results are bit-identical for every count.
-  static constexpr std::size_t kMinVerticesPerThread = 1500;
+  // when the model has under `minVerticesPerThread` vertices per thread: measured on 2 cores
+  // (docs/benchmarks.md), two threads gain nothing below about 40k vertices, because a body's
+  // vertex numbering is not spatial, so each thread's vertices share cache lines with the
+  // other's. Results are bit-identical for every count.
+  static constexpr std::size_t kMinVerticesPerThread = 50000;
   void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread);
   unsigned threads() const { return pool_ ? pool_->size() : 1; }
   // Elements evaluated per force evaluation over all threads, divided by the element count:

@@ -104,7 +104,7 @@ TEST(ThreadSplit, SlabsKeepTheDuplicatedWorkSmall) {
 TEST(ThreadSplit, SmallModelsStayOnOneThread) {
   const SceneDesc scene = parseScene(kAllStages, "/virtual/all_stages.toml");
   World world(buildModel(scene), Integrator::RK4, 1e-3);
-  world.setThreads(8);  // 642 + 146 vertices: below kMinVerticesPerThread for two threads
+  world.setThreads(8);  // 642 + 146 vertices: far below kMinVerticesPerThread for two threads
   EXPECT_EQ(world.threads(), 1u);
 }
 

@@ -308,7 +308,8 @@ bool ImplicitSolver::stepWithin(const World& world, std::vector<Vec3>& x, std::v
     xSaved_[static_cast<std::size_t>(depth)] = x;
     vSaved_[static_cast<std::size_t>(depth)] = v;
   }
-  if (solve(world, x, v, t, dt) || depth >= settings_.maxHalvings) return true;
+  if (solve(world, x, v, t, dt)) return true;
+  if (depth >= settings_.maxHalvings) return false;  // the smallest piece: keep its last iterate
   // Newton did not converge (a hinge folding through its wrap, a violent contact): retry the
   // step as two halves from the saved state.
   ++stats_.halvedSteps;

@@ -22,20 +22,8 @@ void applyGravity(const Model& model, std::size_t begin, std::size_t end, Vec3* 
   for (std::size_t i = begin; i < end; ++i) f[i] += model.gravity * model.mass[i];
 }
 
-void applyGravityOwned(const Model& model, const uint32_t* vertices, std::size_t count, Vec3* f) {
-  for (std::size_t k = 0; k < count; ++k) f[vertices[k]] += model.gravity * model.mass[vertices[k]];
-}
-
 void applyDrag(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* v, Vec3* f) {
   for (std::size_t i = begin; i < end; ++i) f[i] -= (v[i] - air) * (model.drag * model.mass[i]);
-}
-
-void applyDragOwned(const Model& model, const uint32_t* vertices, std::size_t count, const Vec3& air, const Vec3* v,
-               Vec3* f) {
-  for (std::size_t k = 0; k < count; ++k) {
-    const uint32_t i = vertices[k];
-    f[i] -= (v[i] - air) * (model.drag * model.mass[i]);
-  }
 }
 
 void applyWindPressure(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* x,

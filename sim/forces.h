@@ -23,9 +23,5 @@ void applyWindPressure(const Model& model, std::size_t begin, std::size_t end, c
 // The same for the listed faces, adding only to the corners whose bit is set in the mask.
 void applyWindPressureOwned(const Model& model, const ElementRef* list, std::size_t count, const Vec3& air,
                        const Vec3* x, const Vec3* v, Vec3* f);
-// Gravity and drag for the listed vertices only (a thread's own vertices).
-void applyGravityOwned(const Model& model, const uint32_t* vertices, std::size_t count, Vec3* f);
-void applyDragOwned(const Model& model, const uint32_t* vertices, std::size_t count, const Vec3& air, const Vec3* v,
-               Vec3* f);
 
 }  // namespace springy

@@ -24,6 +24,66 @@ struct DirectedEdge {
   }
 };
 
+// Morton code of a point quantised to 2^10 cells per axis of the box [lo, lo + extent].
+uint32_t mortonCode(const Vec3& p, const Vec3& lo, const Vec3& extent) {
+  auto spread = [](uint32_t v) {  // 10 bits -> every third of 30
+    v = (v | (v << 16)) & 0x030000FFu;
+    v = (v | (v << 8)) & 0x0300F00Fu;
+    v = (v | (v << 4)) & 0x030C30C3u;
+    v = (v | (v << 2)) & 0x09249249u;
+    return v;
+  };
+  auto cell = [](double x, double from, double width) {
+    const double t = width > 0.0 ? (x - from) / width : 0.0;
+    return static_cast<uint32_t>(std::clamp(t * 1024.0, 0.0, 1023.0));
+  };
+  return spread(cell(p.x, lo.x, extent.x)) | (spread(cell(p.y, lo.y, extent.y)) << 1) |
+         (spread(cell(p.z, lo.z, extent.z)) << 2);
+}
+
+// Renumbers the vertices of the body just appended (info) in Morton order of their rest
+// positions (ties by mesh index, so the order is a pure function of the mesh), and sorts its
+// struts and hinges by their first vertex, so the force loops stream through memory.
+void orderSpatially(Model& model, BodyInfo& info) {
+  const uint32_t base = info.firstVertex, nv = info.vertexCount;
+  const Bounds box = boundsOf(std::vector<Vec3>(model.restPosition.begin() + base, model.restPosition.end()));
+  std::vector<std::pair<uint32_t, uint32_t>> keys(nv);  // (code, mesh index)
+  for (uint32_t k = 0; k < nv; ++k) keys[k] = {mortonCode(model.restPosition[base + k], box.lo, box.size()), k};
+  std::sort(keys.begin(), keys.end());
+  info.modelVertex.assign(nv, 0);
+  for (uint32_t r = 0; r < nv; ++r) info.modelVertex[keys[r].second] = base + r;
+  const auto renumber = [&](uint32_t& v) { v = info.modelVertex[v - base]; };
+  const auto permute = [&](auto& values) {
+    auto copy = values;
+    for (uint32_t k = 0; k < nv; ++k) values[info.modelVertex[k]] = copy[base + k];
+  };
+  permute(model.mass);
+  permute(model.invMass);
+  permute(model.restPosition);
+  permute(model.initialVelocity);
+  for (std::size_t s = info.firstStrut; s < model.struts.size(); ++s) {
+    Strut& strut = model.struts[s];
+    renumber(strut.i);
+    renumber(strut.j);
+    if (strut.j < strut.i) std::swap(strut.i, strut.j);
+  }
+  std::stable_sort(model.struts.begin() + info.firstStrut, model.struts.end(),
+                   [](const Strut& a, const Strut& b) { return a.i != b.i ? a.i < b.i : a.j < b.j; });
+  for (std::size_t h = info.firstHinge; h < model.hinges.size(); ++h) {
+    for (uint32_t& v : model.hinges[h].v) renumber(v);
+  }
+  std::stable_sort(model.hinges.begin() + info.firstHinge, model.hinges.end(), [](const Hinge& a, const Hinge& b) {
+    return std::min(a.v[0], a.v[1]) < std::min(b.v[0], b.v[1]);
+  });
+  for (std::size_t f = info.firstFace; f < model.faces.size(); ++f) {
+    for (uint32_t& v : model.faces[f]) renumber(v);
+  }
+  for (uint32_t& p : model.pinned) {
+    if (p >= base) renumber(p);
+  }
+  std::sort(model.pinned.begin(), model.pinned.end());
+}
+
 }  // namespace
 
 Vec3 Wind::airVelocity(double t) const {
@@ -194,6 +254,7 @@ void addBody(Model& model, const BodyDesc& desc) {
     if (pinned[i]) model.pinned.push_back(base + i);
   }
   for (const Triangle& t : mesh.triangles) model.faces.push_back({base + t[0], base + t[1], base + t[2]});
+  orderSpatially(model, info);
   model.bodies.push_back(info);
 }
 

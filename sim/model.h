@@ -72,6 +72,11 @@ struct BodyInfo {
   double mass = 0.0;        // [kg]
   double restVolume = 0.0;  // [m^3]
   double restSize = 0.0;    // bounding-box diagonal at rest [m]
+  // The model's vertices are the mesh's in spatial (Morton) order, so that vertices near in
+  // space are near in memory and a contiguous index range is a compact piece of the body (what
+  // one thread owns). modelVertex[k] is the global model index of the mesh's vertex k; messages
+  // and scene keys (pins) speak of mesh indices.
+  std::vector<uint32_t> modelVertex;
 };
 
 // Wind: the air moves with velocity w(t) = base * (1 + gust(t)), gust a smooth seeded

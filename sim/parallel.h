@@ -5,10 +5,11 @@
 // counts: every vertex sums its terms stage by stage, and within a stage in element index
 // order, exactly as the one-threaded loop does. Threads get it by owning vertices, not
 // elements (the "owner computes" rule):
-//   - the vertices are split into one slab per thread along the longest axis of the rest
-//     shape's bounding box, so each thread's vertices are a compact region;
+//   - the vertices are split into one contiguous index range per thread; addBody numbers each
+//     body's vertices in spatial (Morton) order, so a range is a compact region and each
+//     thread writes its own stretch of memory;
 //   - each thread walks, in index order, the elements that touch a vertex it owns, and adds an
-//     element's force only to the vertices it owns (ElementRef::mask); an element across a slab
+//     element's force only to the vertices it owns (ElementRef::mask); an element across a range
 //     boundary is evaluated by each thread that owns one of its vertices (a few percent of
 //     the work, measured in docs/benchmarks.md);
 //   - no two threads ever write the same vertex, so there are no atomics and no locks, and each

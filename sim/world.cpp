@@ -99,31 +99,19 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
   pool_.reset();
   shares_.clear();
   owner_.clear();
-  threadForces_.clear();
   if (threads <= 1) return;
 
-  // Owners: slabs of equal vertex count along the longest axis of the rest shape's box (ties
-  // broken by index, so the split is a pure function of the model).
-  Vec3 lo = model_.restPosition[0], hi = lo;
-  for (const Vec3& p : model_.restPosition) {
-    lo = componentMin(lo, p);
-    hi = componentMax(hi, p);
-  }
-  const Vec3 extent = hi - lo;
-  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
-  std::vector<uint32_t> order(n);
-  for (uint32_t i = 0; i < n; ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const double pa = model_.restPosition[a][axis], pb = model_.restPosition[b][axis];
-    return pa < pb || (pa == pb && a < b);
-  });
+  // Owners: contiguous index ranges, the ones forVertices hands out. addBody numbers each
+  // body's vertices in spatial order, so a range is a compact piece of a body: few elements
+  // straddle two owners, and each thread writes its own stretch of memory.
   owner_.assign(n, 0);
   std::vector<uint8_t>& owner = owner_;
-  for (std::size_t k = 0; k < n; ++k) owner[order[k]] = static_cast<uint8_t>(k * threads / n);
-  threadForces_.assign(threads, std::vector<Vec3>(n));
+  for (unsigned t = 0; t < threads; ++t) {
+    for (std::size_t i = n * t / threads; i < n * (t + 1) / threads; ++i) owner[i] = static_cast<uint8_t>(t);
+  }
 
   shares_.resize(threads);
-  for (uint32_t i = 0; i < n; ++i) shares_[owner[i]].vertices.push_back(i);
+  for (unsigned t = 0; t < threads; ++t) shares_[t].begin = n * t / threads, shares_[t].end = n * (t + 1) / threads;
   // Each thread lists, in index order, the elements with at least one vertex it owns.
   const auto distribute = [&](auto&& vertexOf, std::size_t count, int corners, auto member) {
     for (std::size_t e = 0; e < count; ++e) {
@@ -175,8 +163,7 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
 void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const {
   const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
   if (pool_) {
-    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air); });
-    gatherForces(f, false);
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, false); });
     return;
   }
   const std::size_t n = model_.vertexCount();
@@ -194,16 +181,16 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
   }
 }
 
-void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air) const {
+void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
+                        bool toAcceleration) const {
   // The same stages in the same order as the one-threaded loop, restricted to this thread's
   // vertices: each vertex receives the same terms in the same order.
   const Share& share = shares_[thread];
-  Vec3* f = threadForces_[thread].data();
-  for (uint32_t i : share.vertices) f[i] = Vec3{};
+  std::fill(f + share.begin, f + share.end, Vec3{});
   for (ForceStage stage : forceStages_) {
     switch (stage) {
-      case ForceStage::Gravity: applyGravityOwned(model_, share.vertices.data(), share.vertices.size(), f); break;
-      case ForceStage::Drag: applyDragOwned(model_, share.vertices.data(), share.vertices.size(), air, v, f); break;
+      case ForceStage::Gravity: applyGravity(model_, share.begin, share.end, f); break;
+      case ForceStage::Drag: applyDrag(model_, share.begin, share.end, air, v, f); break;
       case ForceStage::Wind: applyWindPressureOwned(model_, share.faces.data(), share.faces.size(), air, x, v, f); break;
       case ForceStage::Struts: applyStrutsOwned(model_.struts.data(), share.struts.data(), share.struts.size(), x, v, f); break;
       case ForceStage::Hinges:
@@ -211,22 +198,15 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
         break;
     }
   }
-}
-
-void World::gatherForces(Vec3* out, bool toAcceleration) const {
-  pool_->forRange(model_.vertexCount(), [&](std::size_t begin, std::size_t end) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const Vec3& f = threadForces_[owner_[i]][i];
-      out[i] = toAcceleration ? f * model_.invMass[i] : f;
-    }
-  });
+  if (toAcceleration) {
+    for (std::size_t i = share.begin; i < share.end; ++i) f[i] = f[i] * model_.invMass[i];  // pinned: invMass 0
+  }
 }
 
 void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
   if (pool_) {
     const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
-    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air); });
-    gatherForces(a, true);
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, a, true); });
     return;
   }
   Vec3* f = forceScratch_.data();

@@ -61,10 +61,10 @@ class World {
 
   // Runs the step on up to `requested` threads (the calling thread included). Fewer are used
   // when the model has under `minVerticesPerThread` vertices per thread: measured on 2 cores
-  // (docs/benchmarks.md), two threads gain nothing below about 40k vertices, because a body's
-  // vertex numbering is not spatial, so each thread's vertices share cache lines with the
-  // other's. Results are bit-identical for every count.
-  static constexpr std::size_t kMinVerticesPerThread = 50000;
+  // (docs/benchmarks.md), two threads make an RK4 step 1.25x faster at 642 vertices, 1.7x at
+  // 2562 and 1.7-1.8x from 10k on; below about 1000 per thread the fork-join overhead eats the
+  // gain. Results are bit-identical for every count.
+  static constexpr std::size_t kMinVerticesPerThread = 1000;
   void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread);
   unsigned threads() const { return pool_ ? pool_->size() : 1; }
   // Elements evaluated per force evaluation over all threads, divided by the element count:
@@ -91,20 +91,18 @@ class World {
 
  private:
   void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const;
-  // One thread's share of a force evaluation: the forces on its own vertices, summed into its
-  // private buffer (threadForces_[thread]), so no cache line is written by two threads.
-  void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air) const;
-  // Forces of every vertex from the threads' buffers, times `scale` (1 or the inverse masses),
-  // written by index ranges.
-  void gatherForces(Vec3* out, bool toAcceleration) const;
+  // One thread's share of a force evaluation: the forces on its own vertices (a contiguous
+  // range), optionally divided by the masses, written to f. Threads write disjoint ranges.
+  void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
+                   bool toAcceleration) const;
   // Runs fn(begin, end) over [0, vertexCount) split among the threads.
   template <class F>
   void forVertices(F&& fn) const;
   void collide();
 
-  // A thread's share: the vertices it owns and the elements that touch them.
+  // A thread's share: the vertices it owns, [begin, end), and the elements that touch them.
   struct Share {
-    std::vector<uint32_t> vertices;
+    std::size_t begin = 0, end = 0;
     std::vector<ElementRef> struts, hinges, faces;
   };
 
@@ -126,7 +124,6 @@ class World {
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
   std::vector<uint8_t> owner_;                 // owning thread of each vertex
-  mutable std::vector<std::vector<Vec3>> threadForces_;  // per thread, full size (own entries used)
 };
 
 }  // namespace springy

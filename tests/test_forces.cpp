@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <set>
 
 #include "fixtures.h"
 #include "sim/hinge.h"
@@ -252,6 +253,68 @@ TEST(Hinge, FastKernelMatchesTheReferenceFormulas) {
   EXPECT_GT(seriesCases, 500);
   EXPECT_GT(atanCases, 500);
   EXPECT_GT(guardCases, 10);
+}
+
+}  // namespace
+}  // namespace springy
+
+namespace springy {
+namespace {
+
+TEST(Model, VerticesAreRenumberedInSpatialOrderKeepingTheMesh) {
+  // addBody numbers a body's vertices in Morton order; the model must still be the mesh's:
+  // the same positions, faces with the same orientation, one strut per mesh edge.
+  const TriMesh mesh = makeIcosphere(1.0, 5);  // 10242 vertices
+  Model model;
+  BodyDesc desc;
+  desc.name = "ball";
+  desc.mesh = mesh;
+  desc.mass = 1.0;
+  desc.hingePeriod = 0.5;
+  addBody(model, desc);
+  const std::vector<uint32_t>& mv = model.bodies[0].modelVertex;
+  const std::size_t n = mesh.positions.size();
+  ASSERT_EQ(mv.size(), n);
+  std::vector<bool> seen(n, false);
+  for (std::size_t k = 0; k < n; ++k) {
+    ASSERT_LT(mv[k], n);
+    ASSERT_FALSE(seen[mv[k]]) << "modelVertex is not a permutation";
+    seen[mv[k]] = true;
+    ASSERT_EQ(model.restPosition[mv[k]], mesh.positions[k]) << "mesh vertex " << k;
+  }
+  ASSERT_EQ(model.faces.size(), mesh.triangles.size());
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    ASSERT_EQ(model.faces[f], (Triangle{mv[t[0]], mv[t[1]], mv[t[2]]})) << "face " << f;
+  }
+  std::set<std::pair<uint32_t, uint32_t>> edges, struts;
+  for (const Triangle& t : mesh.triangles) {
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t a = mv[t[c]], b = mv[t[(c + 1) % 3]];
+      edges.insert({std::min(a, b), std::max(a, b)});
+    }
+  }
+  for (const Strut& s : model.struts) struts.insert({std::min(s.i, s.j), std::max(s.i, s.j)});
+  EXPECT_EQ(struts, edges);
+  EXPECT_EQ(model.struts.size(), edges.size());
+  EXPECT_EQ(model.hinges.size(), edges.size());
+  double total = 0.0;
+  for (double m : model.mass) total += m;
+  EXPECT_NEAR(total, 1.0, 1e-12);
+
+  // Spatial: halving the index range cuts few struts, so each of two threads owns a compact
+  // piece; the subdivision's own numbering (midpoints of the last level last) cuts many.
+  const auto cut = [&](auto meshIndex) {
+    std::size_t count = 0;
+    for (const auto& [a, b] : edges) count += (meshIndex(a) < n / 2) != (meshIndex(b) < n / 2);
+    return static_cast<double>(count);
+  };
+  std::vector<uint32_t> toMesh(n);
+  for (uint32_t k = 0; k < n; ++k) toMesh[mv[k]] = k;
+  const double spatialCut = cut([](uint32_t i) { return i; });
+  const double meshCut = cut([&](uint32_t i) { return toMesh[i]; });
+  EXPECT_LT(spatialCut, 0.02 * static_cast<double>(edges.size()));
+  EXPECT_LT(spatialCut, 0.1 * meshCut);
 }
 
 }  // namespace

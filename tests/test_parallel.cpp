@@ -93,8 +93,8 @@ TEST(ThreadSplit, ForcesEqualTheOneThreadedSumExactly) {
   for (std::size_t i = 0; i < f1.size(); ++i) ASSERT_EQ(f1[i], f2[i]) << "vertex " << i;
 }
 
-TEST(ThreadSplit, SlabsKeepTheDuplicatedWorkSmall) {
-  // Elements across the boundary between two threads' slabs are evaluated twice; for a
+TEST(ThreadSplit, SpatialRangesKeepTheDuplicatedWorkSmall) {
+  // Elements across the boundary between two threads' vertex ranges are evaluated twice; for a
   // compact split that is a thin band (for this 2-body scene well under 10% of elements).
   const World world = makeWorld(Integrator::SymplecticEuler, 2);
   EXPECT_GT(world.redundancy(), 1.0);
@@ -104,7 +104,7 @@ TEST(ThreadSplit, SlabsKeepTheDuplicatedWorkSmall) {
 TEST(ThreadSplit, SmallModelsStayOnOneThread) {
   const SceneDesc scene = parseScene(kAllStages, "/virtual/all_stages.toml");
   World world(buildModel(scene), Integrator::RK4, 1e-3);
-  world.setThreads(8);  // 642 + 146 vertices: far below kMinVerticesPerThread for two threads
+  world.setThreads(8);  // 642 + 146 vertices: under kMinVerticesPerThread (1000) for two threads
   EXPECT_EQ(world.threads(), 1u);
 }
 

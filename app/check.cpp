@@ -1,4 +1,5 @@
 // `springy check`: runs scenes headlessly under the stability monitor and reports per body.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +26,12 @@ void writeTraceRow(std::ostream& out, const std::string& scene, double t, const 
                 m.centroid.x, m.centroid.y, m.centroid.z, m.volume, m.kinetic, m.gravitational, m.elastic, m.total(),
                 m.maxStrain);
   out << scene << line;
+}
+
+// The mesh's index of a model vertex of body `info` (addBody renumbers them spatially).
+uint32_t meshVertex(const BodyInfo& info, uint32_t modelIndex) {
+  const auto it = std::find(info.modelVertex.begin(), info.modelVertex.end(), modelIndex);
+  return static_cast<uint32_t>(it - info.modelVertex.begin());
 }
 
 }  // namespace
@@ -64,12 +71,16 @@ int runCheck(const CheckOptions& options) {
     const double frame = 1.0 / scene.render.fps;
     const long frames = std::lround(scene.duration / frame);
     std::optional<Failure> failure;
+    // At rest at the end (RestWatch): the frames of the last second.
+    const double watchFrom = scene.duration - RestWatch::kWindow;
+    RestWatch rest;
     for (long k = 1; k <= frames && !failure; ++k) {
       if (interrupted()) {
         std::cerr << "springy check: interrupted\n";
         return 130;
       }
       failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
+      if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
       if (trace.is_open()) {
         for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
           writeTraceRow(trace, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
@@ -85,7 +96,7 @@ int runCheck(const CheckOptions& options) {
       std::printf("  %-16s %9llu %8.3f %8.2f %10.4f %10.2e %9.3f %10.3f %10.4g %10.4g %10.4g %s\n", info.name.c_str(),
                   static_cast<unsigned long long>(world.stepCount()), world.time(), wall, r.maxStrain,
                   r.maxPenetration, r.minVolumeRatio, r.last.volume / info.restVolume, r.last.kinetic,
-                  r.last.gravitational, r.last.elastic, atRest(r.last, info) ? "yes" : "no");
+                  r.last.gravitational, r.last.elastic, rest.atRest(info) ? "yes" : "no");
       if (monitor.energyChecked()) {
         std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
                     r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
@@ -110,6 +121,21 @@ int runCheck(const CheckOptions& options) {
                         info.name.c_str(), 100.0 * ratio, 100.0 * options.endVolume);
           failure = Failure{b, world.stepCount(), world.time(), what};
         }
+      }
+    }
+    if (!failure && options.endAtRest) {
+      for (uint32_t b = 0; b < world.model().bodies.size() && !failure; ++b) {
+        const BodyInfo& info = world.model().bodies[b];
+        if (rest.atRest(info)) continue;
+        const auto [moved, worst] = rest.largestMove(info);
+        char what[400];
+        std::snprintf(what, sizeof what,
+                      "body '%s' is not at rest at the end: in the last %.0f s its vertex %u (of the mesh) moved "
+                      "over %.3g m, more than %.3g m (%.1f%% of its size); lengthen the scene or damp the body more "
+                      "(strut_decay, hinge_decay, [environment] drag)",
+                      info.name.c_str(), RestWatch::kWindow, meshVertex(info, worst), moved,
+                      RestWatch::kFraction * info.restSize, 100.0 * RestWatch::kFraction);
+        failure = Failure{b, world.stepCount(), world.time(), what};
       }
     }
     if (failure) {

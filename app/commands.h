@@ -16,6 +16,7 @@ struct CheckOptions {
   std::string trace;  // CSV path, empty for none
   double minVolume = 0.0;  // fail when a body's volume falls below this fraction of rest
   double endVolume = 0.0;  // fail when a body ends below this fraction of its rest volume
+  bool endAtRest = false;  // fail unless every body is at rest (sim/monitor.h) through the last second
 };
 int runCheck(const CheckOptions& options);
 

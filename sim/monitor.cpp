@@ -102,4 +102,26 @@ std::optional<Failure> Monitor::check(const World& world) {
   return std::nullopt;
 }
 
+void RestWatch::add(const std::vector<Vec3>& x) {
+  if (lo_.empty()) {
+    lo_ = x;
+    hi_ = x;
+    return;
+  }
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    lo_[i] = componentMin(lo_[i], x[i]);
+    hi_[i] = componentMax(hi_[i], x[i]);
+  }
+}
+
+std::pair<double, uint32_t> RestWatch::largestMove(const BodyInfo& info) const {
+  double moved = 0.0;
+  uint32_t worst = info.firstVertex;
+  for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount && i < lo_.size(); ++i) {
+    const double extent = length(hi_[i] - lo_[i]);
+    if (extent > moved) moved = extent, worst = i;
+  }
+  return {moved, worst};
+}
+
 }  // namespace springy

@@ -62,6 +62,21 @@ TEST_F(AppTest, VolumeLimitsFailACollapsingBody) {
   EXPECT_EQ(r.status, 0) << r.output;
 }
 
+TEST_F(AppTest, EndAtRestFailsAMovingBodyAndPassesAStillOne) {
+  // The tiny ball is still bouncing when its 1 s scene ends; the resting ball, set down on
+  // the ground and damped, is still through its last second.
+  Result r = run("check " + data("tiny.toml") + " --end-at-rest");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("body 'ball' is not at rest at the end: in the last 1 s its vertex"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("(0.2% of its size)"), std::string::npos) << r.output;
+  r = run("check " + data("tiny.toml"));  // without the flag, motion at the end is no failure
+  EXPECT_EQ(r.status, 0) << r.output;
+  r = run("check " + data("resting.toml") + " --end-at-rest");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find(" yes\n"), std::string::npos) << r.output;  // the report's rest column
+}
+
 TEST_F(AppTest, UnknownSceneKeyIsReportedWithFileAndLine) {
   const Result r = run("check " + data("typo.toml"));
   EXPECT_EQ(r.status, 1);

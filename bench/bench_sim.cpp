@@ -118,6 +118,25 @@ void BM_HingeKernel(benchmark::State& state) {
 }
 BENCHMARK(BM_HingeKernel)->DenseRange(2, 6)->UseRealTime();
 
+// The same hinges one at a time (a range of one hinge takes the one-hinge kernel instead of
+// the four-lane packets): the packets' gain, measured in the same run.
+void BM_HingeKernelOneAtATime(benchmark::State& state) {
+  const Model model = ballModel(static_cast<int>(state.range(0)), false);
+  std::vector<HingeTerms> terms;
+  for (const Hinge& h : model.hinges) terms.push_back(hingeTerms(h));
+  std::vector<Vec3> x, v, f(model.vertexCount());
+  perturbedState(model, x, v);
+  for (auto _ : state) {
+    for (std::size_t k = 0; k < model.hinges.size(); ++k) {
+      applyHinges(model.hinges.data(), terms.data(), k, k + 1, x.data(), v.data(), f.data());
+    }
+    benchmark::DoNotOptimize(f.data());
+    benchmark::ClobberMemory();
+  }
+  nsPer(state, "ns_per_hinge", static_cast<double>(model.hinges.size()));
+}
+BENCHMARK(BM_HingeKernelOneAtATime)->DenseRange(2, 6)->UseRealTime();
+
 // --- a whole force evaluation (every stage of the ball: gravity, struts, hinges)
 
 void BM_Forces(benchmark::State& state) {

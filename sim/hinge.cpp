@@ -3,6 +3,11 @@
 #include <cmath>
 #include <limits>
 
+// The vector helpers below (hingePacket) return 32-byte vectors; they are local to this file
+// and inlined, so GCC's warning that such calls have another ABI with and without AVX concerns
+// no caller.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace springy {
 
 bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g, double minLeverLeft,
@@ -59,14 +64,16 @@ namespace {
 // atan(t) for |t| <= 1/4 by its Taylor series t - t^3/3 + t^5/5 - ... to t^27: the first term
 // left out, t^29/29, is below 2^-53 |t|, so the result is as accurate as std::atan's. The
 // polynomial in z = t^2 is evaluated by Estrin's scheme (pairs, then pairs of pairs), which
-// has a quarter of Horner's dependency chain.
-inline double atanSmall(double t) {
-  const double z = t * t, z2 = z * z, z4 = z2 * z2, z8 = z4 * z4;
-  const double a0 = -1.0 / 3 + z * (1.0 / 5), a1 = -1.0 / 7 + z * (1.0 / 9);
-  const double a2 = -1.0 / 11 + z * (1.0 / 13), a3 = -1.0 / 15 + z * (1.0 / 17);
-  const double a4 = -1.0 / 19 + z * (1.0 / 21), a5 = -1.0 / 23 + z * (1.0 / 25);
-  const double b0 = a0 + z2 * a1, b1 = a2 + z2 * a3, b2 = a4 + z2 * a5;
-  const double p = (b0 + z4 * b1) + z8 * (b2 + z4 * (-1.0 / 27));
+// has a quarter of Horner's dependency chain. T is double or a vector of doubles (Lanes): the
+// same operations in the same order, so every lane gets the scalar result bit for bit.
+template <class T>
+inline T atanSmall(const T& t) {
+  const T z = t * t, z2 = z * z, z4 = z2 * z2, z8 = z4 * z4;
+  const T a0 = -1.0 / 3 + z * (1.0 / 5), a1 = -1.0 / 7 + z * (1.0 / 9);
+  const T a2 = -1.0 / 11 + z * (1.0 / 13), a3 = -1.0 / 15 + z * (1.0 / 17);
+  const T a4 = -1.0 / 19 + z * (1.0 / 21), a5 = -1.0 / 23 + z * (1.0 / 25);
+  const T b0 = a0 + z2 * a1, b1 = a2 + z2 * a3, b2 = a4 + z2 * a5;
+  const T p = (b0 + z4 * b1) + z8 * (b2 + z4 * (-1.0 / 27));
   return t + t * (z * p);
 }
 
@@ -107,26 +114,122 @@ inline bool hingeForces(const Hinge& hg, const HingeTerms& terms, const Vec3* x,
   return true;
 }
 
+
+// Four hinges at once, one per lane of a vector of four doubles (GCC's vector extension: one
+// AVX register where the CPU has AVX2, chosen at run time, else two SSE2 halves). Each lane
+// performs hingeForces' operations in the same order, and the build never fuses a multiply
+// and an add (-ffp-contract=off), so a hinge's forces are bit-identical whichever packet, lane,
+// instruction set or thread computes them (tests/test_forces.cpp checks against hingeForces).
+typedef double Lanes __attribute__((vector_size(32)));
+
+struct V3L {
+  Lanes x, y, z;
+};
+inline V3L operator+(const V3L& a, const V3L& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3L operator-(const V3L& a, const V3L& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3L operator-(const V3L& a) { return {-a.x, -a.y, -a.z}; }
+inline V3L operator*(const V3L& a, const Lanes& s) { return {a.x * s, a.y * s, a.z * s}; }
+inline Lanes dot(const V3L& a, const V3L& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline V3L cross(const V3L& a, const V3L& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline Lanes sqrt(const Lanes& a) {
+  Lanes r;
+  for (int l = 0; l < 4; ++l) r[l] = std::sqrt(a[l]);
+  return r;
+}
+
+// The forces of hinges hs[0..3] into out[lane][corner]; ok[lane] is hingeForces' result.
+__attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* const hs[4],
+                                                                   const HingeTerms* const ts[4], const Vec3* x,
+                                                                   const Vec3* v, Vec3 out[4][4], bool ok[4]) {
+  V3L p[4], w[4];
+  Lanes restCos, restSin, minLeverSquared[2], invMinLever[2], stiffness, damping;
+  for (int l = 0; l < 4; ++l) {
+    const Hinge& hg = *hs[l];
+    const HingeTerms& t = *ts[l];
+    for (int i = 0; i < 4; ++i) {
+      const Vec3& a = x[hg.v[i]];
+      const Vec3& b = v[hg.v[i]];
+      p[i].x[l] = a.x, p[i].y[l] = a.y, p[i].z[l] = a.z;
+      w[i].x[l] = b.x, w[i].y[l] = b.y, w[i].z[l] = b.z;
+    }
+    restCos[l] = t.restCos, restSin[l] = t.restSin;
+    for (int s = 0; s < 2; ++s) minLeverSquared[s][l] = t.minLeverSquared[s], invMinLever[s][l] = t.invMinLever[s];
+    stiffness[l] = hg.stiffness, damping[l] = hg.damping;
+  }
+  const V3L e = p[1] - p[0], x02 = p[2] - p[0], x03 = p[3] - p[0];
+  const Lanes ee = dot(e, e);
+  const V3L nl = cross(e, x02), nr = cross(x03, e);
+  const Lanes nl2 = dot(nl, nl), nr2 = dot(nr, nr);
+  const auto valid = (ee > 0.0) & (nl2 > 1e-24 * ee * ee) & (nr2 > 1e-24 * ee * ee);
+  const Lanes l01 = sqrt(ee);
+  const Lanes s = dot(cross(nl, nr), e), c = dot(nl, nr) * l01;
+  const Lanes sd = s * restCos - c * restSin;
+  const Lanes cd = c * restCos + s * restSin;
+  Lanes delta = atanSmall(sd / cd);
+  for (int l = 0; l < 4; ++l) {
+    if (!(cd[l] > 0.0 && std::fabs(sd[l]) <= 0.25 * cd[l])) delta[l] = std::atan2(sd[l], cd[l]);
+  }
+  const Lanes wl = nl2 < minLeverSquared[0] * ee ? invMinLever[0] / sqrt(nl2) : l01 / nl2;
+  const Lanes wr = nr2 < minLeverSquared[1] * ee ? invMinLever[1] / sqrt(nr2) : l01 / nr2;
+  const V3L g2 = nl * -wl;
+  const V3L g3 = nr * -wr;
+  const V3L g1 = (g2 * dot(x02, e) + g3 * dot(x03, e)) * (-1.0 / ee);
+  const V3L g0 = -(g1 + g2 + g3);
+  const Lanes rate = dot(g0, w[0]) + dot(g1, w[1]) + dot(g2, w[2]) + dot(g3, w[3]);
+  const Lanes scale = -(stiffness * delta + damping * rate);
+  const V3L g[4] = {g0, g1, g2, g3};
+  for (int l = 0; l < 4; ++l) {
+    ok[l] = valid[l] != 0;
+    for (int i = 0; i < 4; ++i) out[l][i] = Vec3{g[i].x[l] * scale[l], g[i].y[l] * scale[l], g[i].z[l] * scale[l]};
+  }
+}
+
 }  // namespace
 
 void applyHinges(const Hinge* hinges, const HingeTerms* terms, std::size_t begin, std::size_t end, const Vec3* x,
                  const Vec3* v, Vec3* f) {
-  Vec3 out[4];
-  for (std::size_t k = begin; k < end; ++k) {
-    const Hinge& hg = hinges[k];
-    if (!hingeForces(hg, terms[k], x, v, out)) continue;
-    for (int i = 0; i < 4; ++i) f[hg.v[i]] += out[i];
+  Vec3 out[4][4];
+  bool ok[4];
+  std::size_t k = begin;
+  for (; k + 4 <= end; k += 4) {
+    const Hinge* const hs[4] = {&hinges[k], &hinges[k + 1], &hinges[k + 2], &hinges[k + 3]};
+    const HingeTerms* const ts[4] = {&terms[k], &terms[k + 1], &terms[k + 2], &terms[k + 3]};
+    hingePacket(hs, ts, x, v, out, ok);
+    for (int l = 0; l < 4; ++l) {  // in hinge order, as the one-at-a-time loop adds them
+      if (!ok[l]) continue;
+      for (int i = 0; i < 4; ++i) f[hs[l]->v[i]] += out[l][i];
+    }
+  }
+  for (; k < end; ++k) {
+    if (!hingeForces(hinges[k], terms[k], x, v, out[0])) continue;
+    for (int i = 0; i < 4; ++i) f[hinges[k].v[i]] += out[0][i];
   }
 }
 
 void applyHingesOwned(const Hinge* hinges, const HingeTerms* terms, const ElementRef* list, std::size_t count,
-                 const Vec3* x, const Vec3* v, Vec3* f) {
-  Vec3 out[4];
-  for (std::size_t r = 0; r < count; ++r) {
+                      const Vec3* x, const Vec3* v, Vec3* f) {
+  Vec3 out[4][4];
+  bool ok[4];
+  std::size_t r = 0;
+  for (; r + 4 <= count; r += 4) {
+    const Hinge* hs[4];
+    const HingeTerms* ts[4];
+    for (int l = 0; l < 4; ++l) hs[l] = &hinges[list[r + l].index], ts[l] = &terms[list[r + l].index];
+    hingePacket(hs, ts, x, v, out, ok);
+    for (int l = 0; l < 4; ++l) {
+      if (!ok[l]) continue;
+      for (int i = 0; i < 4; ++i) {
+        if (list[r + l].mask & (1u << i)) f[hs[l]->v[i]] += out[l][i];
+      }
+    }
+  }
+  for (; r < count; ++r) {
     const Hinge& hg = hinges[list[r].index];
-    if (!hingeForces(hg, terms[list[r].index], x, v, out)) continue;
+    if (!hingeForces(hg, terms[list[r].index], x, v, out[0])) continue;
     for (int i = 0; i < 4; ++i) {
-      if (list[r].mask & (1u << i)) f[hg.v[i]] += out[i];
+      if (list[r].mask & (1u << i)) f[hg.v[i]] += out[0][i];
     }
   }
 }

@@ -1,25 +1,26 @@
 #!/usr/bin/env bash
 # Regenerates the README's gallery: one contact sheet per showcase scene in docs/gallery/,
-# four stills each at moments that tell the scene's story. Needs a build (scripts/build.sh).
+# four stills each at moments that tell the scene's story, the last at the scene's end. Needs a
+# build (scripts/build.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 springy=${SPRINGY_BUILD_DIR:-build}/app/springy
 out=docs/gallery
 mkdir -p "$out"
 declare -A times=(
-  [single_sphere]=0,1.9,2.6,10
-  [spheres]=0,2.0,3.3,10
-  [fixed_single_sphere]=0,1,3,10
-  [ramp]=0,3.4,7,13
+  [single_sphere]=0,1.9,2.6,12
+  [spheres]=0,2.0,3.3,18
+  [fixed_single_sphere]=0,1,3,12
+  [ramp]=0,3.4,7,16
   [cube]=0,1.9,2.5,10
   [bunny]=0,1.5,2.3,10
   [bunny_light]=0,1.5,2.3,10
-  [jelly]=0,1.45,1.8,10
+  [jelly]=0,1.45,1.8,12
   [sample]=0,2,4,10
 )
 for scene in "${!times[@]}"; do
   "$springy" frames "scenes/$scene.toml" -o "$out" --sheet-only --width 384 --height 216 \
-    --times "${times[$scene]}" --duration 13 &
+    --times "${times[$scene]}" --duration "${times[$scene]##*,}" &
   # Two at a time: the machine has two cores.
   while [ "$(jobs -r | wc -l)" -ge 2 ]; do sleep 0.5; done
 done

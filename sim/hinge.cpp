@@ -1,5 +1,6 @@
 #include "sim/hinge.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -77,6 +78,44 @@ inline T atanSmall(const T& t) {
   return t + t * (z * p);
 }
 
+// The hinge of a crushed face fades out (Hinge::minLever, hinge.h): its energy is
+// E = 1/2 k delta^2 s_l s_r with s = S(|r| / minLever), S(u) = 3u^2 - 2u^3 below 1 and 1 above (a
+// smoothstep: S and S' continuous at 1, and S(u)/u bounded, so the force stays finite as the
+// lever arm vanishes). The force is exactly -grad E (conservative: a crushed face can neither
+// gain nor pump energy), the damping -d (G . v) G with G = s grad(theta) (never adds energy).
+inline void fadeOf(double u, double& s, double& ds) {
+  if (u >= 1.0) {
+    s = 1.0, ds = 0.0;
+  } else {
+    s = u * u * (3.0 - 2.0 * u), ds = 6.0 * u * (1.0 - u);
+  }
+}
+
+// g: the exact gradient of theta; leverL/R: |r_l|, |r_r|.
+void fadedForces(const Hinge& hg, const HingeTerms& terms, const std::array<Vec3, 4>& g, const Vec3& e, const Vec3& x02,
+                 const Vec3& x03, double ee, double leverL, double leverR, double delta, const Vec3* v, Vec3 out[4]) {
+  double sl, dsl, sr, dsr;
+  fadeOf(leverL * terms.invMinLever[0], sl, dsl);
+  fadeOf(leverR * terms.invMinLever[1], sr, dsr);
+  const double fade = sl * sr;
+  // Gradients of the lever lengths: r = x0w - e t with t = (x0w . e) / |e|^2 moves with the
+  // wing vertex along r^ and with the edge's ends in proportion to (1 - t) and t.
+  const double tl = dot(x02, e) / ee, tr = dot(x03, e) / ee;
+  const Vec3 ul = (x02 - e * tl) / leverL, ur = (x03 - e * tr) / leverR;
+  const double cl = dsl * sr * terms.invMinLever[0], cr = sl * dsr * terms.invMinLever[1];  // ds/d|r_l|, ds/d|r_r|
+  const Vec3 ds[4] = {ul * (-(1.0 - tl) * cl) + ur * (-(1.0 - tr) * cr), ul * (-tl * cl) + ur * (-tr * cr), ul * cl,
+                      ur * cr};
+  Vec3 G[4];
+  double rate = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    G[i] = g[static_cast<std::size_t>(i)] * fade;
+    rate += dot(G[i], v[hg.v[i]]);
+  }
+  const double torque = hg.stiffness * delta + hg.damping * rate;
+  const double half = 0.5 * hg.stiffness * delta * delta;
+  for (int i = 0; i < 4; ++i) out[i] = G[i] * -torque - ds[i] * half;
+}
+
 // The forces of one hinge on its four vertices: the formulas of hingeGeometry rewritten with
 // the unnormalised face normals N_l = e x x02 and N_r = x03 x e (e = x1 - x0), for speed:
 //   |r_l| = |N_l| / |e|, so g2 = -n_l / |r_l| = -N_l |e| / |N_l|^2 (no square root), and
@@ -98,13 +137,16 @@ inline bool hingeForces(const Hinge& hg, const HingeTerms& terms, const Vec3* x,
   const double sd = s * terms.restCos - c * terms.restSin;
   const double cd = c * terms.restCos + s * terms.restSin;
   const double delta = (cd > 0.0 && std::fabs(sd) <= 0.25 * cd) ? atanSmall(sd / cd) : std::atan2(sd, cd);
-  // Lever-arm guard (Hinge::minLever): |r| < minLever  <=>  |N|^2 < minLever^2 |e|^2.
-  const double wl = nl2 < terms.minLeverSquared[0] * ee ? terms.invMinLever[0] / std::sqrt(nl2) : l01 / nl2;
-  const double wr = nr2 < terms.minLeverSquared[1] * ee ? terms.invMinLever[1] / std::sqrt(nr2) : l01 / nr2;
+  const double wl = l01 / nl2, wr = l01 / nr2;  // g2 = -n_l / |r_l| = -N_l |e| / |N_l|^2
   const Vec3 g2 = nl * -wl;
   const Vec3 g3 = nr * -wr;
   const Vec3 g1 = (g2 * dot(x02, e) + g3 * dot(x03, e)) * (-1.0 / ee);
   const Vec3 g0 = -(g1 + g2 + g3);
+  // Crushed face (Hinge::minLever): |r| < minLever  <=>  |N|^2 < minLever^2 |e|^2.
+  if (nl2 < terms.minLeverSquared[0] * ee || nr2 < terms.minLeverSquared[1] * ee) {
+    fadedForces(hg, terms, {g0, g1, g2, g3}, e, x02, x03, ee, std::sqrt(nl2) / l01, std::sqrt(nr2) / l01, delta, v, out);
+    return true;
+  }
   const double rate = dot(g0, v[hg.v[0]]) + dot(g1, v[hg.v[1]]) + dot(g2, v[hg.v[2]]) + dot(g3, v[hg.v[3]]);
   const double torque = hg.stiffness * delta + hg.damping * rate;
   out[0] = g0 * -torque;
@@ -144,7 +186,7 @@ __attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* 
                                                                    const HingeTerms* const ts[4], const Vec3* x,
                                                                    const Vec3* v, Vec3 out[4][4], bool ok[4]) {
   V3L p[4], w[4];
-  Lanes restCos, restSin, minLeverSquared[2], invMinLever[2], stiffness, damping;
+  Lanes restCos, restSin, minLeverSquared[2], stiffness, damping;
   for (int l = 0; l < 4; ++l) {
     const Hinge& hg = *hs[l];
     const HingeTerms& t = *ts[l];
@@ -155,7 +197,7 @@ __attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* 
       w[i].x[l] = b.x, w[i].y[l] = b.y, w[i].z[l] = b.z;
     }
     restCos[l] = t.restCos, restSin[l] = t.restSin;
-    for (int s = 0; s < 2; ++s) minLeverSquared[s][l] = t.minLeverSquared[s], invMinLever[s][l] = t.invMinLever[s];
+    for (int s = 0; s < 2; ++s) minLeverSquared[s][l] = t.minLeverSquared[s];
     stiffness[l] = hg.stiffness, damping[l] = hg.damping;
   }
   const V3L e = p[1] - p[0], x02 = p[2] - p[0], x03 = p[3] - p[0];
@@ -171,8 +213,8 @@ __attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* 
   for (int l = 0; l < 4; ++l) {
     if (!(cd[l] > 0.0 && std::fabs(sd[l]) <= 0.25 * cd[l])) delta[l] = std::atan2(sd[l], cd[l]);
   }
-  const Lanes wl = nl2 < minLeverSquared[0] * ee ? invMinLever[0] / sqrt(nl2) : l01 / nl2;
-  const Lanes wr = nr2 < minLeverSquared[1] * ee ? invMinLever[1] / sqrt(nr2) : l01 / nr2;
+  const Lanes wl = l01 / nl2, wr = l01 / nr2;
+  const auto crushed = (nl2 < minLeverSquared[0] * ee) | (nr2 < minLeverSquared[1] * ee);
   const V3L g2 = nl * -wl;
   const V3L g3 = nr * -wr;
   const V3L g1 = (g2 * dot(x02, e) + g3 * dot(x03, e)) * (-1.0 / ee);
@@ -182,6 +224,10 @@ __attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* 
   const V3L g[4] = {g0, g1, g2, g3};
   for (int l = 0; l < 4; ++l) {
     ok[l] = valid[l] != 0;
+    if (ok[l] && crushed[l]) {  // rare: a crushed face's hinge fades out (fadedForces)
+      ok[l] = hingeForces(*hs[l], *ts[l], x, v, out[l]);
+      continue;
+    }
     for (int i = 0; i < 4; ++i) out[l][i] = Vec3{g[i].x[l] * scale[l], g[i].y[l] * scale[l], g[i].z[l] * scale[l]};
   }
 }
@@ -245,8 +291,13 @@ double hingeEnergy(const Hinge* hinges, std::size_t begin, std::size_t end, cons
   double e = 0.0;
   for (std::size_t k = begin; k < end; ++k) {
     const Hinge& hg = hinges[k];
-    const double d = angleDifference(dihedralAngle(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]]), hg.restAngle);
-    e += 0.5 * hg.stiffness * d * d;
+    HingeGeometry g;
+    if (!hingeGeometry(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]], g)) continue;  // the force skips it too
+    const double d = angleDifference(g.theta, hg.restAngle);
+    double sl = 1.0, sr = 1.0, unused;
+    if (hg.minLever[0] > 0.0) fadeOf(g.leverLeft / hg.minLever[0], sl, unused);
+    if (hg.minLever[1] > 0.0) fadeOf(g.leverRight / hg.minLever[1], sr, unused);
+    e += 0.5 * hg.stiffness * d * d * (sl * sr);
   }
   return e;
 }

@@ -102,8 +102,10 @@ bool dihedralHessian(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3&
 bool hingeJacobian(const Hinge& hg, const Vec3* x, const Vec3* v, Matrix12& dfdx, Matrix12& dfdv, bool definite) {
   const Vec3 &x0 = x[hg.v[0]], &x1 = x[hg.v[1]], &x2 = x[hg.v[2]], &x3 = x[hg.v[3]];
   HingeGeometry geo;
-  // The solver uses the force's own (lever-bounded) gradient, so it stays finite in a crushed
-  // face; the exact Jacobian uses the exact one.
+  // The solver's (definite) Jacobian bounds the lever the gradient divides by, so it stays
+  // finite in a crushed face; there it only approximates the faded force's derivative (hinge.h),
+  // which costs Newton iterations, not accuracy: the residual uses the force itself. The exact
+  // Jacobian uses the exact gradient.
   if (!hingeGeometry(x0, x1, x2, x3, geo, definite ? hg.minLever[0] : 0.0, definite ? hg.minLever[1] : 0.0)) {
     return false;
   }

@@ -37,7 +37,7 @@ struct Hinge {
   double restAngle;  // theta0 [rad]
   double stiffness;  // k_theta [N m / rad]
   double damping;    // d_theta [N m s / rad]
-  double minLever[2] = {0.0, 0.0};  // lower bounds of |r_l|, |r_r| in the force (1/5 of rest) [m]
+  double minLever[2] = {0.0, 0.0};  // below these |r_l|, |r_r| the hinge fades out (1/5 of rest) [m]
 };
 
 enum class SpringModel {

@@ -52,6 +52,8 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
     // The energy the body has to spend: kinetic + elastic + the fall to its support.
     r.energyScale = r.start.kinetic + r.start.elastic + info.mass * g * std::max(info.restSize, height);
     if (!(r.energyScale > 0.0)) r.energyScale = 1e-12;
+    r.lowestTotal = r.start.total();
+    r.lowestTotalTime = world.time();
     records_.push_back(r);
   }
 }
@@ -72,12 +74,18 @@ std::optional<Failure> Monitor::check(const World& world) {
       s << "it blew up to " << m.size / info.restSize << " times its rest size";
       return fail(s.str(), kStepAdvice);
     }
-    if (checkEnergy_ && m.total() - r.start.total() > limits_.energyTolerance * r.energyScale) {
+    // Nothing injects energy, so the total may only fall: a rise above the lowest total so far
+    // (not only above the start: a body that has lost most of its energy and gains it back at
+    // rest is as wrong) is an instability.
+    const double reference = limits_.energyFromLowest ? r.lowestTotal : r.start.total();
+    if (checkEnergy_ && m.total() - reference > limits_.energyTolerance * r.energyScale) {
       std::ostringstream s;
-      s << "its total energy rose from " << r.start.total() << " J to " << m.total()
-        << " J although nothing injects energy (the integration is unstable or too coarse)";
+      s << "its total energy rose from " << reference << " J (at t = "
+        << (limits_.energyFromLowest ? r.lowestTotalTime : 0.0) << " s) to "
+        << m.total() << " J although nothing injects energy (the integration is unstable or too coarse)";
       return fail(s.str(), kStepAdvice);
     }
+    if (m.total() < r.lowestTotal) r.lowestTotal = m.total(), r.lowestTotalTime = world.time();
     if (m.penetration > limits_.penetration * info.restSize) {
       std::ostringstream s;
       s << "a vertex is " << m.penetration << " m behind a plane";

@@ -16,6 +16,10 @@ namespace springy {
 struct MonitorLimits {
   double sizeFactor = 10.0;        // a body larger than this times its rest size has blown up
   double energyTolerance = 0.02;   // allowed rise of total energy, as a fraction of its scale
+  bool energyFromLowest = true;    // the rise counts from the lowest total so far (energy pumped
+                                   // into a body that has lost most of it), not only from the
+                                   // start; the stability study measures from the start, the
+                                   // classical bounded-energy criterion
   double penetration = 1e-4;       // allowed depth behind a plane, as a fraction of body size
   double minVolume = 0.0;          // a body whose volume falls below this fraction of rest has
                                    // collapsed (0: not checked)
@@ -32,6 +36,8 @@ struct Failure {
 struct BodyRecord {
   BodyMeasures start, last;
   double energyScale = 0.0;   // [J] the energy a failure is measured against
+  double lowestTotal = 0.0;   // [J] the lowest total energy so far, and when
+  double lowestTotalTime = 0.0;
   double maxStrain = 0.0;
   double maxPenetration = 0.0;
   double minVolumeRatio = 1.0, maxVolumeRatio = 1.0;

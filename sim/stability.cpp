@@ -182,6 +182,7 @@ RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, do
   // but never rise by more than its own scale.
   MonitorLimits limits;
   limits.energyTolerance = 1.0;
+  limits.energyFromLowest = false;
   Monitor monitor(world, limits);
   RunOutcome out;
   const auto steps = static_cast<uint64_t>(std::llround(horizon / dt));

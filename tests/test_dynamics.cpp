@@ -6,6 +6,7 @@
 
 #include "fixtures.h"
 #include "sim/diagnostics.h"
+#include "sim/monitor.h"
 #include "sim/scene.h"
 #include "sim/shapes.h"
 
@@ -140,6 +141,38 @@ TEST(Energy, DampingNeverAddsEnergy) {
     ASSERT_LE(e, previous * (1 + 1e-9)) << "step " << s;
     previous = e;
   }
+}
+
+TEST(Energy, MonitorCatchesEnergyGainedAfterItWasLost) {
+  // A squashed, damped ball loses most of its elastic energy; then energy is put back (its
+  // velocities set to a kick worth a fifth of the start energy). The total is still far below
+  // the start, which an "above the start" test would accept; the monitor measures from the
+  // lowest total so far and stops the run, naming when that lowest was. The stability study's
+  // bounded-energy criterion (energyFromLowest = false) does not.
+  World world(ballModel({}, 0.02, 0.1, 0.7), Integrator::RK4, 2e-4);
+  Monitor monitor(world);
+  MonitorLimits fromStart;
+  fromStart.energyFromLowest = false;
+  Monitor classic(world, fromStart);
+  const double start = measureBody(world, 0).total();
+  for (int s = 0; s < 5000; ++s) {
+    world.step();
+    if (s % 50 == 0) {
+      ASSERT_FALSE(monitor.check(world));
+      ASSERT_FALSE(classic.check(world));
+    }
+  }
+  const double low = measureBody(world, 0).total();
+  ASSERT_LT(low, 0.5 * start);
+  const double kick = std::sqrt(2.0 * 0.2 * start / 3.0);  // 3 kg: kinetic energy 0.2 start
+  std::vector<Vec3> v(world.positions().size(), Vec3{kick, 0.0, 0.0});
+  world.setState(world.positions(), v, world.time());
+  ASSERT_LT(measureBody(world, 0).total(), start);
+  const std::optional<Failure> failure = monitor.check(world);
+  ASSERT_TRUE(failure);
+  EXPECT_NE(failure->message.find("its total energy rose from"), std::string::npos) << failure->message;
+  EXPECT_NE(failure->message.find("(at t = 0.9902 s)"), std::string::npos) << failure->message;  // the last check
+  EXPECT_FALSE(classic.check(world));
 }
 
 // Damped oscillator x'' = -w^2 x - 2 z w x', one free mass on a strut with the other end

@@ -103,38 +103,27 @@ void BM_StrutKernel(benchmark::State& state) {
 }
 BENCHMARK(BM_StrutKernel)->DenseRange(2, 6)->UseRealTime();
 
-void BM_HingeKernel(benchmark::State& state) {
+// The hinges of a ball, all in one call (four-lane packets) or one hinge per call (the
+// one-hinge kernel): the packets' gain, measured in the same run.
+void hingeKernel(benchmark::State& state, bool oneAtATime) {
   const Model model = ballModel(static_cast<int>(state.range(0)), false);
   std::vector<HingeTerms> terms;
   for (const Hinge& h : model.hinges) terms.push_back(hingeTerms(h));
   std::vector<Vec3> x, v, f(model.vertexCount());
   perturbedState(model, x, v);
+  const std::size_t n = model.hinges.size(), chunk = oneAtATime ? 1 : n;
   for (auto _ : state) {
-    applyHinges(model.hinges.data(), terms.data(), 0, model.hinges.size(), x.data(), v.data(), f.data());
-    benchmark::DoNotOptimize(f.data());
-    benchmark::ClobberMemory();
-  }
-  nsPer(state, "ns_per_hinge", static_cast<double>(model.hinges.size()));
-}
-BENCHMARK(BM_HingeKernel)->DenseRange(2, 6)->UseRealTime();
-
-// The same hinges one at a time (a range of one hinge takes the one-hinge kernel instead of
-// the four-lane packets): the packets' gain, measured in the same run.
-void BM_HingeKernelOneAtATime(benchmark::State& state) {
-  const Model model = ballModel(static_cast<int>(state.range(0)), false);
-  std::vector<HingeTerms> terms;
-  for (const Hinge& h : model.hinges) terms.push_back(hingeTerms(h));
-  std::vector<Vec3> x, v, f(model.vertexCount());
-  perturbedState(model, x, v);
-  for (auto _ : state) {
-    for (std::size_t k = 0; k < model.hinges.size(); ++k) {
-      applyHinges(model.hinges.data(), terms.data(), k, k + 1, x.data(), v.data(), f.data());
+    for (std::size_t k = 0; k < n; k += chunk) {
+      applyHinges(model.hinges.data(), terms.data(), k, k + chunk, x.data(), v.data(), f.data());
     }
     benchmark::DoNotOptimize(f.data());
     benchmark::ClobberMemory();
   }
-  nsPer(state, "ns_per_hinge", static_cast<double>(model.hinges.size()));
+  nsPer(state, "ns_per_hinge", static_cast<double>(n));
 }
+void BM_HingeKernel(benchmark::State& state) { hingeKernel(state, false); }
+void BM_HingeKernelOneAtATime(benchmark::State& state) { hingeKernel(state, true); }
+BENCHMARK(BM_HingeKernel)->DenseRange(2, 6)->UseRealTime();
 BENCHMARK(BM_HingeKernelOneAtATime)->DenseRange(2, 6)->UseRealTime();
 
 // --- a whole force evaluation (every stage of the ball: gravity, struts, hinges)

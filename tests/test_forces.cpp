@@ -240,8 +240,8 @@ TEST(Hinge, FastKernelMatchesTheReferenceFormulas) {
   // The force kernel rearranges hingeGeometry's formulas for speed (unnormalised normals, the
   // angle difference from its sine and cosine, a series for small differences). Compared with
   // the reference f_i = -(k (theta - theta0) + d dtheta/dt) g_i over random hinges bent a
-  // little (series branch), a lot (atan2 branch) and across +-pi, it must agree to rounding
-  // (crushed wings, which the trials also make, are checked against the faded energy elsewhere).
+  // little (series branch), a lot (atan2 branch) and across +-pi, it must agree to rounding;
+  // with a crushed wing (the fading guard) it must be minus the gradient of the faded energy.
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int seriesCases = 0, atanCases = 0, guardCases = 0;
@@ -261,7 +261,23 @@ TEST(Hinge, FastKernelMatchesTheReferenceFormulas) {
     const double delta = angleDifference(g.theta, h.restAngle);
     (std::fabs(delta) < 0.24 ? seriesCases : atanCases)++;
     if (g.leverLeft < h.minLever[0] || g.leverRight < h.minLever[1]) {
-      guardCases++;  // a crushed face: CrushedFaceFadesOutConservatively checks those forces
+      // A crushed face: the hinge fades out, and its elastic force is minus the gradient of the
+      // faded energy (hingeEnergy), by central differences.
+      guardCases++;
+      std::vector<Vec3> still(4), f(4);
+      applyHinges(&h, 0, 1, x.data(), still.data(), f.data());
+      double largest = 0.0;
+      for (const Vec3& fi : f) largest = std::max(largest, length(fi));
+      const double step = 1e-7;
+      for (int i = 0; i < 4; ++i) {
+        for (int c = 0; c < 3; ++c) {
+          std::vector<Vec3> xp = x, xm = x;
+          xp[static_cast<std::size_t>(i)][c] += step;
+          xm[static_cast<std::size_t>(i)][c] -= step;
+          const double dE = (hingeEnergy(&h, 0, 1, xp.data()) - hingeEnergy(&h, 0, 1, xm.data())) / (2 * step);
+          EXPECT_NEAR(f[static_cast<std::size_t>(i)][c], -dE, 1e-5 * (largest + 1.0)) << "trial " << trial;
+        }
+      }
       continue;
     }
     double rate = 0.0;

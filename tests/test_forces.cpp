@@ -12,6 +12,21 @@
 namespace springy {
 namespace {
 
+// Minus the gradient of the hinges' elastic energy (hingeEnergy) at x, by central differences
+// of step h in every coordinate: what their elastic forces must equal.
+std::vector<Vec3> minusEnergyGradient(const Hinge* hinges, std::size_t count, const std::vector<Vec3>& x, double h) {
+  std::vector<Vec3> g(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      std::vector<Vec3> xp = x, xm = x;
+      xp[i][c] += h;
+      xm[i][c] -= h;
+      g[i][c] = -(hingeEnergy(hinges, 0, count, xp.data()) - hingeEnergy(hinges, 0, count, xm.data())) / (2 * h);
+    }
+  }
+  return g;
+}
+
 // Measures period (mean time between upward zero crossings of the extension) and the decay
 // time constant (from the log of successive peak amplitudes) of a strut's oscillation.
 struct Oscillation {
@@ -113,16 +128,9 @@ TEST_P(HingeAngles, ElasticForceIsMinusTheEnergyGradient) {
   x[2] += Vec3{0.05, -0.1, 0.02};
   std::vector<Vec3> v(4), f(4);
   applyHinges(model.hinges.data(), 0, 1, x.data(), v.data(), f.data());
-  const double h = 1e-6;
+  const std::vector<Vec3> expected = minusEnergyGradient(model.hinges.data(), 1, x, 1e-6);
   for (int i = 0; i < 4; ++i) {
-    for (int c = 0; c < 3; ++c) {
-      std::vector<Vec3> xp = x, xm = x;
-      xp[i][c] += h;
-      xm[i][c] -= h;
-      const double grad = (hingeEnergy(model.hinges.data(), 0, 1, xp.data()) -
-                           hingeEnergy(model.hinges.data(), 0, 1, xm.data())) / (2 * h);
-      EXPECT_NEAR(f[i][c], -grad, 1e-6) << "vertex " << i << " component " << c;
-    }
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(f[i][c], expected[i][c], 1e-6) << "vertex " << i << " component " << c;
   }
 }
 
@@ -217,15 +225,9 @@ TEST(Hinge, CrushedFaceFadesOutConservatively) {
     EXPECT_LT(length(sum), 1e-9 * largest + 1e-15) << fraction;
     EXPECT_LT(largest, 10.0 * h.stiffness * 3.2 / h.minLever[0]) << fraction;  // bounded by ~k pi / minLever
     // f = -grad E, by central differences of hingeEnergy (every coordinate of every vertex).
-    const double step = 1e-7 * h.minLever[0];
-    for (int i = 0; i < 4; ++i) {
-      for (int c = 0; c < 3; ++c) {
-        std::vector<Vec3> xp = x, xm = x;
-        xp[static_cast<std::size_t>(i)][c] += step;
-        xm[static_cast<std::size_t>(i)][c] -= step;
-        const double dE = (hingeEnergy(&h, 0, 1, xp.data()) - hingeEnergy(&h, 0, 1, xm.data())) / (2 * step);
-        EXPECT_NEAR(f[static_cast<std::size_t>(i)][c], -dE, 1e-5 * (largest + 1.0)) << fraction << " vertex " << i;
-      }
+    const std::vector<Vec3> expected = minusEnergyGradient(&h, 1, x, 1e-7 * h.minLever[0]);
+    for (std::size_t i = 0; i < 4; ++i) {
+      for (int c = 0; c < 3; ++c) EXPECT_NEAR(f[i][c], expected[i][c], 1e-5 * (largest + 1.0)) << fraction << " vertex " << i;
     }
     const double energy = hingeEnergy(&h, 0, 1, x.data());
     if (fraction < 1.0) {
@@ -268,15 +270,9 @@ TEST(Hinge, FastKernelMatchesTheReferenceFormulas) {
       applyHinges(&h, 0, 1, x.data(), still.data(), f.data());
       double largest = 0.0;
       for (const Vec3& fi : f) largest = std::max(largest, length(fi));
-      const double step = 1e-7;
-      for (int i = 0; i < 4; ++i) {
-        for (int c = 0; c < 3; ++c) {
-          std::vector<Vec3> xp = x, xm = x;
-          xp[static_cast<std::size_t>(i)][c] += step;
-          xm[static_cast<std::size_t>(i)][c] -= step;
-          const double dE = (hingeEnergy(&h, 0, 1, xp.data()) - hingeEnergy(&h, 0, 1, xm.data())) / (2 * step);
-          EXPECT_NEAR(f[static_cast<std::size_t>(i)][c], -dE, 1e-5 * (largest + 1.0)) << "trial " << trial;
-        }
+      const std::vector<Vec3> expected = minusEnergyGradient(&h, 1, x, 1e-7);
+      for (std::size_t i = 0; i < 4; ++i) {
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(f[i][c], expected[i][c], 1e-5 * (largest + 1.0)) << "trial " << trial;
       }
       continue;
     }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 
 #include "sim/error.h"
 #include "sim/hinge.h"
@@ -53,9 +54,10 @@ void orderSpatially(Model& model, BodyInfo& info) {
   info.modelVertex.assign(nv, 0);
   for (uint32_t r = 0; r < nv; ++r) info.modelVertex[keys[r].second] = base + r;
   const auto renumber = [&](uint32_t& v) { v = info.modelVertex[v - base]; };
-  const auto permute = [&](auto& values) {
-    auto copy = values;
-    for (uint32_t k = 0; k < nv; ++k) values[info.modelVertex[k]] = copy[base + k];
+  const auto permute = [&](auto& values) {  // the body's own stretch of a per-vertex array
+    const std::vector<typename std::decay_t<decltype(values)>::value_type> copy(values.begin() + base,
+                                                                             values.begin() + base + nv);
+    for (uint32_t k = 0; k < nv; ++k) values[info.modelVertex[k]] = copy[k];
   };
   permute(model.mass);
   permute(model.invMass);

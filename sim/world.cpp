@@ -80,7 +80,7 @@ World::World(Model model, Integrator integrator, double dt)
   if (!model_.colliders.empty()) sinceContact_.assign(n, 0xFFFF);
   restingSteps_ = static_cast<int>(std::ceil(model_.colliders.restingWindow / dt_));
   if (integrator_ == Integrator::RK4) {
-    for (auto* buffer : {&k1x_, &k1v_, &k2x_, &k2v_, &k3x_, &k3v_, &k4v_, &xs_, &vs_}) buffer->assign(n, Vec3{});
+    for (auto* buffer : {&k1v_, &k2x_, &k2v_, &k3x_, &k3v_, &k4v_, &xs_, &vs_}) buffer->assign(n, Vec3{});
   }
   if (integrator_ == Integrator::VelocityVerlet || integrator_ == Integrator::Leapfrog) vs_.assign(n, Vec3{});
   if (integrator_ == Integrator::VelocityVerlet) aNext_.assign(n, Vec3{});
@@ -282,7 +282,10 @@ void World::step() {
     case Integrator::RK4: {
       // k1 = f(y), k2 = f(y + dt/2 k1), k3 = f(y + dt/2 k2), k4 = f(y + dt k3); the position
       // slopes are the stage velocities, the velocity slopes the stage accelerations.
-      Vec3 *k1x = k1x_.data(), *k1v = k1v_.data(), *k2x = k2x_.data(), *k2v = k2v_.data();
+      // k1x is the velocity itself (read, not copied: v changes only in the final update, after
+      // its own k1x[i] is read).
+      const Vec3* k1x = v;
+      Vec3 *k1v = k1v_.data(), *k2x = k2x_.data(), *k2v = k2v_.data();
       Vec3 *k3x = k3x_.data(), *k3v = k3v_.data(), *k4v = k4v_.data(), *xs = xs_.data(), *vs = vs_.data();
       // Stage state y + h k for the next evaluation; the stage's velocity is also its position
       // slope, kept in kx.
@@ -295,7 +298,6 @@ void World::step() {
           }
         });
       };
-      k1x_ = v_;
       accelerations(x, v, t, k1v);
       stageState(0.5 * dt, k1x, k1v, k2x);
       accelerations(xs, vs, t + 0.5 * dt, k2v);

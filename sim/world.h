@@ -61,9 +61,9 @@ class World {
 
   // Runs the step on up to `requested` threads (the calling thread included). Fewer are used
   // when the model has under `minVerticesPerThread` vertices per thread: measured on 2 cores
-  // (docs/benchmarks.md), two threads make an RK4 step 1.2x faster at 642 vertices, 1.6-1.7x
-  // at 2562 and 1.7-1.9x from 10k on; below about 1000 per thread the fork-join overhead eats
-  // the gain. Results are bit-identical for every count.
+  // (docs/benchmarks.md), two threads make an RK4 step 1.2x faster at 642 vertices, 1.5-1.7x
+  // at 2562 and 10k, 1.8-1.9x from 40k on; below about 1000 per thread the fork-join overhead
+  // eats the gain. Results are bit-identical for every count.
   static constexpr std::size_t kMinVerticesPerThread = 1000;
   void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread);
   unsigned threads() const { return pool_ ? pool_->size() : 1; }
@@ -114,7 +114,7 @@ class World {
   std::vector<ForceStage> forceStages_;
   std::vector<Vec3> x_, v_;
   // Scratch, sized once.
-  std::vector<Vec3> xOld_, a_, k1x_, k1v_, k2x_, k2v_, k3x_, k3v_, k4v_, xs_, vs_, aNext_;
+  std::vector<Vec3> xOld_, a_, k1v_, k2x_, k2v_, k3x_, k3v_, k4v_, xs_, vs_, aNext_;
   mutable std::vector<Vec3> forceScratch_;
   std::vector<uint16_t> sinceContact_;  // steps since each vertex last touched a collider
   int restingSteps_ = 0;                // contact within this many steps is resting contact

@@ -14,9 +14,9 @@ declare -A times=(
   [ramp]=0,3.4,7,16
   [cube]=0,1.9,2.5,10
   [bunny]=0,1.5,2.3,10
-  [bunny_light]=0,1.5,2.3,10
+  [bunny_light]=0,1.5,2.3,25
   [jelly]=0,1.45,1.8,12
-  [sample]=0,2,4,10
+  [sample]=0,2,4,27
 )
 for scene in "${!times[@]}"; do
   "$springy" frames "scenes/$scene.toml" -o "$out" --sheet-only --width 384 --height 216 \

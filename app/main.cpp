@@ -67,8 +67,8 @@ int main(int argc, char** argv) {
   checkCmd->add_option("--end-volume", check.endVolume, "Fail if a body ends below this fraction of its rest volume")
       ->check(CLI::Range(0.0, 1.0));
   checkCmd->add_flag("--end-at-rest", check.endAtRest,
-                     "Fail unless every body is at rest (RMS speed below 0.2% of its size per second) at every "
-                     "frame of the last second");
+                     "Fail unless every body is at rest: over the last second no vertex moves more than 0.2% of "
+                     "its body's size");
 
   springy::SuggestOptions suggest;
   CLI::App* suggestCmd =

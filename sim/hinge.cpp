@@ -156,7 +156,6 @@ inline bool hingeForces(const Hinge& hg, const HingeTerms& terms, const Vec3* x,
   return true;
 }
 
-
 // Four hinges at once, one per lane of a vector of four doubles (GCC's vector extension: one
 // AVX register where the CPU has AVX2, chosen at run time, else two SSE2 halves). Each lane
 // performs hingeForces' operations in the same order, and the build never fuses a multiply
@@ -234,50 +233,52 @@ __attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* 
 
 }  // namespace
 
-void applyHinges(const Hinge* hinges, const HingeTerms* terms, std::size_t begin, std::size_t end, const Vec3* x,
-                 const Vec3* v, Vec3* f) {
-  Vec3 out[4][4];
-  bool ok[4];
-  std::size_t k = begin;
-  for (; k + 4 <= end; k += 4) {
-    const Hinge* const hs[4] = {&hinges[k], &hinges[k + 1], &hinges[k + 2], &hinges[k + 3]};
-    const HingeTerms* const ts[4] = {&terms[k], &terms[k + 1], &terms[k + 2], &terms[k + 3]};
-    hingePacket(hs, ts, x, v, out, ok);
-    for (int l = 0; l < 4; ++l) {  // in hinge order, as the one-at-a-time loop adds them
-      if (!ok[l]) continue;
-      for (int i = 0; i < 4; ++i) f[hs[l]->v[i]] += out[l][i];
-    }
-  }
-  for (; k < end; ++k) {
-    if (!hingeForces(hinges[k], terms[k], x, v, out[0])) continue;
-    for (int i = 0; i < 4; ++i) f[hinges[k].v[i]] += out[0][i];
-  }
-}
+namespace {
 
-void applyHingesOwned(const Hinge* hinges, const HingeTerms* terms, const ElementRef* list, std::size_t count,
-                      const Vec3* x, const Vec3* v, Vec3* f) {
+// Adds the forces of count hinges, the r-th being hinges[indexOf(r)], to the corners whose bit
+// is set in maskOf(r): four at a time through hingePacket, the rest one at a time, always
+// summed in list order.
+template <class IndexOf, class MaskOf>
+void applyHingeList(const Hinge* hinges, const HingeTerms* terms, std::size_t count, IndexOf indexOf, MaskOf maskOf,
+                    const Vec3* x, const Vec3* v, Vec3* f) {
   Vec3 out[4][4];
   bool ok[4];
+  const auto add = [&](std::size_t r, const Vec3 forces[4]) {
+    const Hinge& hg = hinges[indexOf(r)];
+    const uint32_t mask = maskOf(r);
+    for (int i = 0; i < 4; ++i) {
+      if (mask & (1u << i)) f[hg.v[i]] += forces[i];
+    }
+  };
   std::size_t r = 0;
   for (; r + 4 <= count; r += 4) {
     const Hinge* hs[4];
     const HingeTerms* ts[4];
-    for (int l = 0; l < 4; ++l) hs[l] = &hinges[list[r + l].index], ts[l] = &terms[list[r + l].index];
+    for (std::size_t l = 0; l < 4; ++l) hs[l] = &hinges[indexOf(r + l)], ts[l] = &terms[indexOf(r + l)];
     hingePacket(hs, ts, x, v, out, ok);
-    for (int l = 0; l < 4; ++l) {
-      if (!ok[l]) continue;
-      for (int i = 0; i < 4; ++i) {
-        if (list[r + l].mask & (1u << i)) f[hs[l]->v[i]] += out[l][i];
-      }
+    for (std::size_t l = 0; l < 4; ++l) {
+      if (ok[l]) add(r + l, out[l]);
     }
   }
   for (; r < count; ++r) {
-    const Hinge& hg = hinges[list[r].index];
-    if (!hingeForces(hg, terms[list[r].index], x, v, out[0])) continue;
-    for (int i = 0; i < 4; ++i) {
-      if (list[r].mask & (1u << i)) f[hg.v[i]] += out[0][i];
-    }
+    if (hingeForces(hinges[indexOf(r)], terms[indexOf(r)], x, v, out[0])) add(r, out[0]);
   }
+}
+
+}  // namespace
+
+void applyHinges(const Hinge* hinges, const HingeTerms* terms, std::size_t begin, std::size_t end, const Vec3* x,
+                 const Vec3* v, Vec3* f) {
+  applyHingeList(
+      hinges, terms, end - begin, [begin](std::size_t r) { return begin + r; }, [](std::size_t) { return 0xFu; }, x, v,
+      f);
+}
+
+void applyHingesOwned(const Hinge* hinges, const HingeTerms* terms, const ElementRef* list, std::size_t count,
+                      const Vec3* x, const Vec3* v, Vec3* f) {
+  applyHingeList(
+      hinges, terms, count, [list](std::size_t r) { return list[r].index; },
+      [list](std::size_t r) { return list[r].mask; }, x, v, f);
 }
 
 void applyHinges(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f) {

@@ -80,9 +80,9 @@ std::optional<Failure> Monitor::check(const World& world) {
     const double reference = limits_.energyFromLowest ? r.lowestTotal : r.start.total();
     if (checkEnergy_ && m.total() - reference > limits_.energyTolerance * r.energyScale) {
       std::ostringstream s;
-      s << "its total energy rose from " << reference << " J (at t = "
-        << (limits_.energyFromLowest ? r.lowestTotalTime : 0.0) << " s) to "
-        << m.total() << " J although nothing injects energy (the integration is unstable or too coarse)";
+      s << "its total energy rose from " << reference << " J";
+      if (limits_.energyFromLowest) s << " (its lowest, at t = " << r.lowestTotalTime << " s)";
+      s << " to " << m.total() << " J although nothing injects energy (the integration is unstable or too coarse)";
       return fail(s.str(), kStepAdvice);
     }
     if (m.total() < r.lowestTotal) r.lowestTotal = m.total(), r.lowestTotalTime = world.time();

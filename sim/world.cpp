@@ -98,18 +98,11 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
   threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(1, n)));
   pool_.reset();
   shares_.clear();
-  owner_.clear();
   if (threads <= 1) return;
 
   // Owners: contiguous index ranges, the ones forVertices hands out. addBody numbers each
   // body's vertices in spatial order, so a range is a compact piece of a body: few elements
   // straddle two owners, and each thread writes its own stretch of memory.
-  owner_.assign(n, 0);
-  std::vector<uint8_t>& owner = owner_;
-  for (unsigned t = 0; t < threads; ++t) {
-    for (std::size_t i = n * t / threads; i < n * (t + 1) / threads; ++i) owner[i] = static_cast<uint8_t>(t);
-  }
-
   shares_.resize(threads);
   for (unsigned t = 0; t < threads; ++t) shares_[t].begin = n * t / threads, shares_[t].end = n * (t + 1) / threads;
   // Each thread lists, in index order, the elements with at least one vertex it owns.
@@ -118,7 +111,8 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
       for (unsigned t = 0; t < threads; ++t) {
         uint32_t mask = 0;
         for (int c = 0; c < corners; ++c) {
-          if (owner[vertexOf(e, c)] == t) mask |= 1u << c;
+          const std::size_t i = vertexOf(e, c);
+          if (i >= shares_[t].begin && i < shares_[t].end) mask |= 1u << c;
         }
         if (mask != 0) (shares_[t].*member).push_back({static_cast<uint32_t>(e), mask});
       }

@@ -123,7 +123,6 @@ class World {
   std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
-  std::vector<uint8_t> owner_;                 // owning thread of each vertex
 };
 
 }  // namespace springy

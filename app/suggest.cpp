@@ -77,8 +77,8 @@ int runSuggest(const SuggestOptions& options) {
       const std::vector<RowBound> rows = gershgorinRows(model, model.restPosition.data(), bi);
       auto limit = [&](const ParameterScale& s) { return bodyStability(rows, scene.integrator, scene.duration, s).dtMax; };
       const BodyStability now = bodyStability(rows, scene.integrator, scene.duration);
-      std::printf("  body '%s' (%u vertices, %u struts, %u hinges)\n", info.name.c_str(), info.vertexCount,
-                  info.strutCount, info.hingeCount);
+      std::printf("  body '%s' (%u vertices, %u struts, %u hinges%s)\n", info.name.c_str(), info.vertexCount,
+                  info.strutCount, info.hingeCount, info.gasPressure > 0.0 ? ", gas" : "");
       std::printf("    omega_max <= %.4g rad/s (2/omega_max = %.4g s), damping rate <= %.4g 1/s\n", now.omegaMax,
                   now.omegaMax > 0 ? 2.0 / now.omegaMax : INFINITY, now.gammaMax);
       if (!std::isfinite(now.dtMax)) {
@@ -93,8 +93,9 @@ int runSuggest(const SuggestOptions& options) {
                   kSafety * now.dtMax, substeps, scene.dt);
       // Uniform scale f of every time constant: the limit scales with f for the
       // horizon-independent methods; bisect anyway (explicit Euler's depends on the horizon).
-      auto scaled = [](double f, double sp, double sd, double hp, double hd) {
-        return ParameterScale{1.0 / (f * f * sp * sp), 1.0 / (f * sd), 1.0 / (f * f * hp * hp), 1.0 / (f * hd)};
+      auto scaled = [](double f, double sp, double sd, double hp, double hd, double vp = 1) {
+        return ParameterScale{1.0 / (f * f * sp * sp), 1.0 / (f * sd), 1.0 / (f * f * hp * hp), 1.0 / (f * hd),
+                              1.0 / (f * f * vp * vp)};
       };
       const double target = h / kSafety;
       double f = 1.0;
@@ -110,7 +111,7 @@ int runSuggest(const SuggestOptions& options) {
         s << key << (key.back() == '=' ? " " : " = ") << (direct ? *direct * directScale : period);
         return s.str();
       };
-      const bool hinges = info.hingeCount > 0;
+      const bool hinges = info.hingeCount > 0, gas = info.gasPressure > 0.0;
       std::printf("    suggested for a step of %g s%s:\n", h,
                   f > 1.0 ? "" : " (the current values are stable; the stiffest values follow)");
       if (f > 1.0) {
@@ -122,14 +123,16 @@ int runSuggest(const SuggestOptions& options) {
                       value("hinge_period", desc.hingePeriod * f, desc.hingeStiffness, "hinge_stiffness", 1 / (f * f)).c_str(),
                       value("hinge_decay", desc.hingeDecay * f, desc.hingeDamping, "hinge_damping", 1 / f).c_str());
         }
+        if (gas) std::printf(", volume_period = %g", desc.volumePeriod * f);
         std::printf("\n");
       }
       // The stiffest value of each parameter alone, the others at f times their value.
       auto alone = [&](int which) {
         return smallestStable(
             [&](double g) {
-              const double sp = which == 0 ? g : 1, sd = which == 1 ? g : 1, hp = which == 2 ? g : 1, hd = which == 3 ? g : 1;
-              return limit(scaled(f, sp, sd, hp, hd)) >= target;
+              const double sp = which == 0 ? g : 1, sd = which == 1 ? g : 1, hp = which == 2 ? g : 1, hd = which == 3 ? g : 1,
+                           vp = which == 4 ? g : 1;
+              return limit(scaled(f, sp, sd, hp, hd, vp)) >= target;
             },
             1e-4, 1.0);
       };
@@ -148,6 +151,10 @@ int runSuggest(const SuggestOptions& options) {
                     hd <= 1e-4 ? "any " : "",
                     value("hinge_decay >=", desc.hingeDecay * f * hd, desc.hingeDamping, "hinge_damping <=", 1 / (f * hd))
                         .c_str());
+      }
+      if (gas) {
+        const double vp = alone(4);
+        std::printf(", %svolume_period >= %g", vp <= 1e-4 ? "any " : "", desc.volumePeriod * f * vp);
       }
       std::printf("\n");
     }

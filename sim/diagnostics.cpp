@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/strut.h"
 
@@ -39,12 +40,8 @@ BodyMeasures measureBody(const World& world, uint32_t body) {
     const Strut& st = model.struts[s];
     m.maxStrain = std::fmax(m.maxStrain, std::fabs(length(x[st.j] - x[st.i]) - st.restLength) / st.restLength);
   }
-  double sixVolume = 0.0;
-  for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
-    const Triangle& t = model.faces[f];
-    sixVolume += dot(x[t[0]], cross(x[t[1]], x[t[2]]));
-  }
-  m.volume = sixVolume / 6.0;
+  m.volume = enclosedVolume(model, body, x.data());
+  m.elastic += gasEnergy(info, m.volume);
   return m;
 }
 

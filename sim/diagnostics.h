@@ -16,7 +16,7 @@ struct BodyMeasures {
   Vec3 angularMomentum;     // about the origin [kg m^2/s]
   double kinetic = 0.0;     // [J]
   double gravitational = 0.0;  // -sum m g . x [J] (zero at the origin)
-  double elastic = 0.0;     // struts + hinges [J]
+  double elastic = 0.0;     // struts + hinges + enclosed gas [J]
   double volume = 0.0;      // [m^3]
   double size = 0.0;        // bounding-box diagonal [m]
   double maxStrain = 0.0;   // max |l - l0| / l0 over struts

@@ -1,5 +1,9 @@
 #include "sim/forces.h"
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
 namespace springy {
 namespace {
 
@@ -44,6 +48,70 @@ void applyWindPressureOwned(const Model& model, const ElementRef* list, std::siz
   for (std::size_t r = 0; r < count; ++r) {
     const Triangle& t = model.faces[list[r].index];
     if (!windForce(t, c, air, x, v, force)) continue;
+    for (int i = 0; i < 3; ++i) {
+      if (list[r].mask & (1u << i)) f[t[i]] += force;
+    }
+  }
+}
+
+double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x) {
+  double sum = 0.0;
+  for (uint32_t f = begin; f < end; ++f) {
+    const Triangle& t = model.faces[f];
+    sum += dot(x[t[0]] - o, cross(x[t[1]] - o, x[t[2]] - o));
+  }
+  return sum;
+}
+
+double enclosedVolume(const Model& model, uint32_t body, const Vec3* x) {
+  const BodyInfo& info = model.bodies[body];
+  const uint32_t end = info.firstFace + info.faceCount;
+  double sum = 0.0;
+  for (uint32_t f = info.firstFace; f < end; f += kVolumeChunk) {
+    sum += sixVolume(model, f, std::min(f + kVolumeChunk, end), x[info.firstVertex], x);
+  }
+  return sum / 6.0;
+}
+
+double gasOverpressure(const BodyInfo& body, double volume) {
+  if (!(volume > 0.0)) return std::numeric_limits<double>::infinity();
+  return body.gasPressure * (body.restVolume / volume - 1.0);
+}
+
+double gasEnergy(const BodyInfo& body, double volume) {
+  if (body.gasPressure == 0.0) return 0.0;
+  if (!(volume > 0.0)) return std::numeric_limits<double>::infinity();
+  const double d = (volume - body.restVolume) / body.restVolume;  // V / V0 - 1, without cancellation
+  return body.gasPressure * body.restVolume * (d - std::log1p(d));
+}
+
+namespace {
+
+// The gas's force on each corner of face t: p (x1 - x0) x (x2 - x0) / 6.
+inline Vec3 gasForce(const Triangle& t, double p, const Vec3* x) {
+  return cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) * (p / 6.0);
+}
+
+}  // namespace
+
+void applyGasPressure(const Model& model, const double* overpressure, std::size_t begin, std::size_t end,
+                      const Vec3* x, Vec3* f) {
+  for (std::size_t k = begin; k < end; ++k) {
+    const Triangle& t = model.faces[k];
+    const double p = overpressure[model.body[t[0]]];
+    if (p == 0.0) continue;
+    const Vec3 force = gasForce(t, p, x);
+    for (uint32_t i : t) f[i] += force;
+  }
+}
+
+void applyGasPressureOwned(const Model& model, const double* overpressure, const ElementRef* list, std::size_t count,
+                           const Vec3* x, Vec3* f) {
+  for (std::size_t r = 0; r < count; ++r) {
+    const Triangle& t = model.faces[list[r].index];
+    const double p = overpressure[model.body[t[0]]];
+    if (p == 0.0) continue;
+    const Vec3 force = gasForce(t, p, x);
     for (int i = 0; i < 3; ++i) {
       if (list[r].mask & (1u << i)) f[t[i]] += force;
     }

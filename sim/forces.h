@@ -1,5 +1,5 @@
-// springy: external forces (gravity, air drag, wind), one function each over a vertex or
-// face range. Struts and hinges live in strut.h and hinge.h.
+// springy: external forces (gravity, air drag, wind) and the enclosed gas's pressure, one
+// function each over a vertex or face range. Struts and hinges live in strut.h and hinge.h.
 #pragma once
 
 #include <cstddef>
@@ -23,5 +23,33 @@ void applyWindPressure(const Model& model, std::size_t begin, std::size_t end, c
 // The same for the listed faces, adding only to the corners whose bit is set in the mask.
 void applyWindPressureOwned(const Model& model, const ElementRef* list, std::size_t count, const Vec3& air,
                        const Vec3* x, const Vec3* v, Vec3* f);
+
+// Enclosed gas (MODEL.md 1.9; Matyka & Ollila 2004, "Pressure model of soft body simulation"):
+// an isothermal ideal gas, p V = const, inside a closed body, at the ambient pressure p0 when
+// the volume is the rest volume V0. Its pressure over the ambient, p = p0 (V0 / V - 1), pushes
+// every face outward; the volume is exact by the divergence theorem, V = 1/6 sum_f x0 . (x1 x x2)
+// over the outward faces, and the force on vertex i is p dV/dx_i, where each face adds
+// (x1 - x0) x (x2 - x0) / 6 (a third of its area vector) to each of its corners. That force is
+// -dE/dx of the gas's energy E = p0 V0 (V / V0 - 1 - ln(V / V0)) (the work the gas and the
+// ambient do on the body), whose second derivative at V0 is p0 / V0: the breathing stiffness.
+
+// Volume enclosed by a body's faces at positions x (about its first vertex, which keeps the
+// terms small and makes the sum independent of where the body is). The faces are summed in
+// chunks of kVolumeChunk, and the chunks' sums in order, so that threads can share the work
+// and still produce the same number.
+double enclosedVolume(const Model& model, uint32_t body, const Vec3* x);
+constexpr uint32_t kVolumeChunk = 512;
+// Six times the volume of faces [begin, end) of a body about the point o (one chunk's sum).
+double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x);
+// p0 (V0 / V - 1) [Pa]: +inf for V <= 0 (an inverted body).
+double gasOverpressure(const BodyInfo& body, double volume);
+// p0 V0 (V / V0 - 1 - ln(V / V0)) [J]: +inf for V <= 0.
+double gasEnergy(const BodyInfo& body, double volume);
+// Gas pressure on faces [begin, end); overpressure[b] is body b's (0 for bodies without gas).
+void applyGasPressure(const Model& model, const double* overpressure, std::size_t begin, std::size_t end,
+                      const Vec3* x, Vec3* f);
+// The same for the listed faces, adding only to the corners whose bit is set in the mask.
+void applyGasPressureOwned(const Model& model, const double* overpressure, const ElementRef* list, std::size_t count,
+                           const Vec3* x, Vec3* f);
 
 }  // namespace springy

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "sim/colliders.h"
+#include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/world.h"
 
@@ -169,6 +170,14 @@ ImplicitSolver::ImplicitSolver(const Model& model, ImplicitSettings settings) : 
   v0_.assign(n_, Vec3{});
   vTrial_.assign(n_, Vec3{});
   for (Eigen::VectorXd* vec : {&rhs_, &dv_, &r_, &z_, &p_, &q_, &precond_, &filter_}) vec->setZero(dim);
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    if (!(model.bodies[b].gasPressure > 0.0)) continue;
+    gasBodies_.push_back(b);
+    gasRange_.emplace_back(static_cast<Eigen::Index>(3 * model.bodies[b].firstVertex),
+                           static_cast<Eigen::Index>(3 * model.bodies[b].vertexCount));
+  }
+  gasCoefficient_.assign(gasBodies_.size(), 0.0);
+  if (!gasBodies_.empty()) gasGradient_.setZero(dim);
   contacts_.reserve(n_);
   xSaved_.assign(static_cast<std::size_t>(settings_.maxHalvings), std::vector<Vec3>(n_));
   vSaved_.assign(static_cast<std::size_t>(settings_.maxHalvings), std::vector<Vec3>(n_));
@@ -230,6 +239,30 @@ void ImplicitSolver::assemble(const Model& model, const Vec3* x, const Vec3* v, 
   }
 }
 
+void ImplicitSolver::assembleGas(const Model& model, const Vec3* x, double dt) {
+  for (std::size_t k = 0; k < gasBodies_.size(); ++k) {
+    const BodyInfo& info = model.bodies[gasBodies_[k]];
+    gasGradient_.segment(gasRange_[k].first, gasRange_[k].second).setZero();
+    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
+      const Triangle& t = model.faces[f];
+      const Vec3 n = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) / 6.0;
+      for (uint32_t i : t) {
+        for (int c = 0; c < 3; ++c) gasGradient_(static_cast<Eigen::Index>(3 * i) + c) += n[c];
+      }
+    }
+    const double volume = enclosedVolume(model, gasBodies_[k], x);
+    gasCoefficient_[k] = volume > 0.0 ? dt * dt * info.gasPressure * info.restVolume / (volume * volume) : 0.0;
+  }
+}
+
+void ImplicitSolver::addGasProduct(const Eigen::VectorXd& p, Eigen::VectorXd& q) const {
+  for (std::size_t k = 0; k < gasBodies_.size(); ++k) {
+    const auto [first, size] = gasRange_[k];
+    const auto g = gasGradient_.segment(first, size);
+    q.segment(first, size) += (gasCoefficient_[k] * g.dot(p.segment(first, size))) * g;
+  }
+}
+
 void ImplicitSolver::project(Eigen::VectorXd& vec) const {
   vec.array() *= filter_.array();
   for (uint32_t i : contacts_) {
@@ -284,6 +317,7 @@ int ImplicitSolver::solveCg(double absoluteFloor) {
   for (; it < settings_.maxCg; ++it) {
     if (!(r_.norm() > threshold)) break;
     q_.noalias() = A_ * p_;
+    addGasProduct(p_, q_);
     project(q_);
     const double pq = p_.dot(q_);
     if (!(pq > 0.0)) break;  // not positive definite along p (cannot happen with the definite K)
@@ -335,16 +369,24 @@ bool ImplicitSolver::solve(const World& world, std::vector<Vec3>& x, std::vector
   for (int it = 0; it < settings_.maxNewton && !converged; ++it) {
     ++stats_.newtonIterations;
     assemble(model, x1_.data(), v.data(), true);
-    // A = M - h D - h^2 K
+    // A = M - h D - h^2 K (+ the gas's c g g^T, applied in CG's product)
     double* av = A_.valuePtr();
     for (Eigen::Index k = 0; k < A_.nonZeros(); ++k) av[k] = -dt * dvals[k] - dt * dt * kv[k];
     for (std::size_t i = 0; i < n_; ++i) {
       for (int c = 0; c < 3; ++c) {
         double& diag = av[diagonal_[i].index[c] + c];
         diag += model.mass[i];
-        precond_(static_cast<Eigen::Index>(3 * i) + c) = diag > 0.0 ? 1.0 / diag : 0.0;
+        precond_(static_cast<Eigen::Index>(3 * i) + c) = diag;
       }
     }
+    if (!gasBodies_.empty()) {
+      assembleGas(model, x1_.data(), dt);
+      for (std::size_t k = 0; k < gasBodies_.size(); ++k) {
+        const auto [first, size] = gasRange_[k];
+        precond_.segment(first, size) += gasCoefficient_[k] * gasGradient_.segment(first, size).cwiseAbs2();
+      }
+    }
+    for (Eigen::Index k = 0; k < precond_.size(); ++k) precond_(k) = precond_(k) > 0.0 ? 1.0 / precond_(k) : 0.0;
     stats_.cgIterations += static_cast<uint64_t>(solveCg(0.1 * settings_.newtonTolerance * r0));
     // Backtracking: accept the full Newton step unless it raises the residual.
     double alpha = 1.0, trial = rnorm;

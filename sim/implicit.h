@@ -1,5 +1,5 @@
 // springy: the implicit integrator, backward Euler with Newton iterations and conjugate
-// gradients over the analytic Jacobians of the strut and hinge forces (Baraff & Witkin 1998,
+// gradients over the analytic Jacobians of the strut, hinge and gas forces (Baraff & Witkin 1998,
 // "Large steps in cloth simulation").
 //
 // One step solves for the end-of-step velocity v1
@@ -44,6 +44,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "sim/model.h"
@@ -120,6 +121,13 @@ class ImplicitSolver {
   // Removes the constrained components of a vector: pinned vertices entirely, contact vertices
   // along their contact normal.
   void project(Eigen::VectorXd& vec) const;
+  // The gas's stiffness for the solver at positions x: for each body with gas, its volume
+  // gradient g (in gasGradient_) and c = h^2 p0 V0 / V^2, so that A gains c g g^T (the
+  // definite, rank-one part of -h^2 dF/dx; the indefinite p d^2V/dx^2 is left out, as the
+  // hinges' curvature term is).
+  void assembleGas(const Model& model, const Vec3* x, double dt);
+  // q += sum over gas bodies of c g (g . p).
+  void addGasProduct(const Eigen::VectorXd& p, Eigen::VectorXd& q) const;
   // Finds the vertices whose predicted path hits a collider and sets their constraints.
   void findContacts(const World& world, const std::vector<Vec3>& x0, double t, double dt);
 
@@ -137,6 +145,10 @@ class ImplicitSolver {
   std::vector<uint32_t> contacts_;     // vertices with a contact constraint this step
   std::vector<Vec3> contactNormal_;    // per vertex (meaningful for contacts_)
   std::vector<double> contactSpeed_;   // prescribed v1 . n per vertex
+  std::vector<uint32_t> gasBodies_;    // bodies that hold gas
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> gasRange_;  // per gas body: first row, rows
+  std::vector<double> gasCoefficient_;  // per gas body: h^2 p0 V0 / V^2
+  Eigen::VectorXd gasGradient_;        // dV/dx of each gas body's vertices (0 elsewhere)
 };
 
 }  // namespace springy

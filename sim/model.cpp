@@ -206,6 +206,10 @@ void addBody(Model& model, const BodyDesc& desc) {
       // Each undirected edge once: at its direction with from < to, or at the only direction
       // it has (a border edge of an open mesh).
       const DirectedEdge* twin = findEdge(e.to, e.from);
+      if (!twin && desc.volumePeriod > 0.0) {
+        throw Error(where(desc) + ": volume_period needs a closed mesh, but edge (" + std::to_string(e.from) + ", " +
+                    std::to_string(e.to) + ") borders only triangle " + std::to_string(e.face));
+      }
       if (e.from > e.to && twin) continue;
       addStrut(e.from, e.to);
       if (!useHinges || !twin) continue;
@@ -257,7 +261,33 @@ void addBody(Model& model, const BodyDesc& desc) {
   }
   for (const Triangle& t : mesh.triangles) model.faces.push_back({base + t[0], base + t[1], base + t[2]});
   orderSpatially(model, info);
+  if (desc.volumePeriod > 0.0) {
+    if (!(info.restVolume > 0.0)) {
+      throw Error(where(desc) + ": volume_period needs a mesh that encloses a positive volume (outward faces); its "
+                  "signed volume is " + std::to_string(info.restVolume));
+    }
+    info.gasPressure = gasPressureFromPeriod(model, info, desc.volumePeriod);
+  }
   model.bodies.push_back(info);
+}
+
+double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x) {
+  // g_i = dV/dx_i: each face adds (x1 - x0) x (x2 - x0) / 6 to each of its corners.
+  std::vector<Vec3> g(body.vertexCount);
+  for (uint32_t f = body.firstFace; f < body.firstFace + body.faceCount; ++f) {
+    const Triangle& t = model.faces[f];
+    const Vec3 n = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) / 6.0;
+    for (uint32_t i : t) g[i - body.firstVertex] += n;
+  }
+  double sum = 0.0;
+  for (uint32_t k = 0; k < body.vertexCount; ++k) sum += lengthSquared(g[k]) * model.invMass[body.firstVertex + k];
+  return sum;
+}
+
+double gasPressureFromPeriod(const Model& model, const BodyInfo& body, double period) {
+  const double sum = volumeModeSum(model, body, model.restPosition.data());
+  const double omega = 2 * kPi / period;
+  return sum > 0.0 ? omega * omega * body.restVolume / sum : 0.0;
 }
 
 }  // namespace springy

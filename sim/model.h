@@ -60,6 +60,9 @@ struct BodyDesc {
   double strutDecay = 0.03, strutPeriod = 0.07;  // T, P [s]
   double hingeDecay = 2.0, hingePeriod = 0.5;    // T_theta, P_theta [s]; hingePeriod <= 0: no hinges
   std::optional<double> strutStiffness, strutDamping, hingeStiffness, hingeDamping;
+  // Enclosed gas (Matyka & Ollila 2004): the period of the gas's breathing mode [s], from which
+  // its pressure p0 is derived; 0: no gas. Needs a closed mesh.
+  double volumePeriod = 0.0;
   std::vector<uint32_t> pinned;  // body-local vertex indices held fixed in place
 };
 
@@ -72,6 +75,9 @@ struct BodyInfo {
   double mass = 0.0;        // [kg]
   double restVolume = 0.0;  // [m^3]
   double restSize = 0.0;    // bounding-box diagonal at rest [m]
+  // Enclosed isothermal ideal gas at the ambient pressure p0 when the volume is restVolume: its
+  // pressure over the ambient is p0 (V0 / V - 1). 0: the body holds no gas. [Pa]
+  double gasPressure = 0.0;
   // The model's vertices are the mesh's in spatial (Morton) order, so that vertices near in
   // space are near in memory and a contiguous index range is a compact piece of the body (what
   // one thread owns). modelVertex[k] is the global model index of the mesh's vertex k; messages
@@ -120,6 +126,13 @@ struct Model {
 // and the offending edge or vertex for degenerate geometry (zero-length edge, zero-area face,
 // a hinge whose wing vertex lies on the hinge line) or an invalid parameter.
 void addBody(Model& model, const BodyDesc& desc);
+
+// Gas pressure p0 [Pa] that gives a closed body's breathing mode (the volume's oscillation
+// against the gas alone) the angular frequency 2 pi / period: omega^2 = p0 sum_i |g_i|^2 / m_i
+// / V0, with g_i = dV/dx_i at rest. Pinned vertices do not take part.
+double gasPressureFromPeriod(const Model& model, const BodyInfo& body, double period);
+// sum_i |dV/dx_i|^2 / m_i over a body's free vertices at positions x [m^4 / kg].
+double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x);
 
 // Area share of each vertex of a mesh: each face gives its area to its corners in proportion
 // to the corner's interior angle (angle / pi), seed 3.3.1. Sums to the total surface area.

@@ -290,6 +290,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.strutPeriod = r.positive("strut_period", b.strutPeriod);
   b.hingeDecay = r.number("hinge_decay", b.hingeDecay);
   b.hingePeriod = r.number("hinge_period", b.hingePeriod);
+  b.volumePeriod = r.positive("volume_period", 0.0);
   b.strutStiffness = r.optionalNumber("strut_stiffness");
   b.strutDamping = r.optionalNumber("strut_damping");
   b.hingeStiffness = r.optionalNumber("hinge_stiffness");

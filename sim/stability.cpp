@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "sim/error.h"
+#include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/shapes.h"
 
@@ -131,6 +132,12 @@ std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t
       row(hg.v[a]).hingeDamping += hg.damping * w[a] * sum;
     }
   }
+  if (info.gasPressure > 0.0) {
+    const double sum = volumeModeSum(model, info, x);
+    const double volume = enclosedVolume(model, body, x);
+    const double w2 = volume > 0.0 ? info.gasPressure * info.restVolume / (volume * volume) * sum : 0.0;
+    for (RowBound& r : rows) r.gasStiffness = w2;
+  }
   return rows;
 }
 
@@ -138,7 +145,8 @@ BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integr
                             const ParameterScale& scale) {
   BodyStability out;
   for (const RowBound& r : rows) {
-    const double w2 = scale.strutStiffness * r.strutStiffness + scale.hingeStiffness * r.hingeStiffness;
+    const double w2 =
+        scale.strutStiffness * r.strutStiffness + scale.hingeStiffness * r.hingeStiffness + scale.gasStiffness * r.gasStiffness;
     const double gamma = scale.strutDamping * r.strutDamping + scale.hingeDamping * r.hingeDamping + r.drag;
     const double omega = std::sqrt(w2);
     out.omegaMax = std::max(out.omegaMax, omega);

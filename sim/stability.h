@@ -36,12 +36,17 @@ namespace springy {
 struct RowBound {
   uint32_t vertex;
   double strutStiffness = 0, hingeStiffness = 0, strutDamping = 0, hingeDamping = 0, drag = 0;
+  // The enclosed gas's breathing mode, omega^2 = (p0 V0 / V^2) sum_j |g_j|^2 / m_j: one
+  // eigenvalue of the whole body, added to every row (the largest eigenvalue of a sum is at
+  // most the sum of the largest eigenvalues).
+  double gasStiffness = 0;
 };
 
 // Multipliers of a body's spring constants (P scaled by f multiplies stiffness by 1/f^2, T by f
 // multiplies damping by 1/f).
 struct ParameterScale {
   double strutStiffness = 1, strutDamping = 1, hingeStiffness = 1, hingeDamping = 1;
+  double gasStiffness = 1;  // volume_period scaled by f: 1/f^2
 };
 
 struct BodyStability {

@@ -56,6 +56,7 @@ std::string_view forceStageName(ForceStage stage) {
     case ForceStage::Wind: return "wind";
     case ForceStage::Struts: return "struts";
     case ForceStage::Hinges: return "hinges";
+    case ForceStage::Gas: return "gas";
   }
   return "?";
 }
@@ -69,6 +70,20 @@ World::World(Model model, Integrator integrator, double dt)
   if (model_.wind && model_.wind->pressure > 0.0) forceStages_.push_back(ForceStage::Wind);
   if (!model_.struts.empty()) forceStages_.push_back(ForceStage::Struts);
   if (!model_.hinges.empty()) forceStages_.push_back(ForceStage::Hinges);
+  for (uint32_t b = 0; b < model_.bodies.size(); ++b) {
+    const BodyInfo& info = model_.bodies[b];
+    if (!(info.gasPressure > 0.0)) continue;
+    gasBodies_.push_back(b);
+    const uint32_t end = info.firstFace + info.faceCount;
+    for (uint32_t f = info.firstFace; f < end; f += kVolumeChunk) {
+      volumeChunks_.push_back({b, f, std::min(f + kVolumeChunk, end)});
+    }
+  }
+  chunkSum_.assign(volumeChunks_.size(), 0.0);
+  if (!gasBodies_.empty()) {
+    forceStages_.push_back(ForceStage::Gas);
+    overpressure_.assign(model_.bodies.size(), 0.0);
+  }
   for (TriangleCollider& tc : model_.colliders.meshes) {
     if (tc.nodes.empty()) tc.buildBvh();
   }
@@ -121,7 +136,7 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
   distribute([&](std::size_t e, int c) { return c == 0 ? model_.struts[e].i : model_.struts[e].j; },
              model_.struts.size(), 2, &Share::struts);
   distribute([&](std::size_t e, int c) { return model_.hinges[e].v[c]; }, model_.hinges.size(), 4, &Share::hinges);
-  if (model_.wind) {
+  if (model_.wind || !gasBodies_.empty()) {
     distribute([&](std::size_t e, int c) { return model_.faces[e][static_cast<std::size_t>(c)]; }, model_.faces.size(),
                3, &Share::faces);
   }
@@ -154,8 +169,27 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
   std::fill(sinceContact_.begin(), sinceContact_.end(), 0xFFFF);
 }
 
+void World::updateGas(const Vec3* x) const {
+  if (gasBodies_.empty()) return;
+  const auto sumChunks = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c) {
+      const VolumeChunk& chunk = volumeChunks_[c];
+      chunkSum_[c] = sixVolume(model_, chunk.begin, chunk.end, x[model_.bodies[chunk.body].firstVertex], x);
+    }
+  };
+  if (pool_ && volumeChunks_.size() > 1) pool_->forRange(volumeChunks_.size(), sumChunks);
+  else sumChunks(0, volumeChunks_.size());
+  std::size_t c = 0;
+  for (uint32_t b : gasBodies_) {
+    double sum = 0.0;
+    for (; c < volumeChunks_.size() && volumeChunks_[c].body == b; ++c) sum += chunkSum_[c];
+    overpressure_[b] = gasOverpressure(model_.bodies[b], sum / 6.0);
+  }
+}
+
 void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const {
   const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
+  updateGas(x);
   if (pool_) {
     pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, false); });
     return;
@@ -171,6 +205,7 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
       case ForceStage::Hinges:
         applyHinges(model_.hinges.data(), hingeTerms_.data(), 0, model_.hinges.size(), x, v, f);
         break;
+      case ForceStage::Gas: applyGasPressure(model_, overpressure_.data(), 0, model_.faces.size(), x, f); break;
     }
   }
 }
@@ -190,6 +225,9 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
       case ForceStage::Hinges:
         applyHingesOwned(model_.hinges.data(), hingeTerms_.data(), share.hinges.data(), share.hinges.size(), x, v, f);
         break;
+      case ForceStage::Gas:
+        applyGasPressureOwned(model_, overpressure_.data(), share.faces.data(), share.faces.size(), x, f);
+        break;
     }
   }
   if (toAcceleration) {
@@ -200,6 +238,7 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
 void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
   if (pool_) {
     const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
+    updateGas(x);
     pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, a, true); });
     return;
   }

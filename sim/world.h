@@ -1,7 +1,7 @@
 // springy: the world a scene builds, and its time step.
 //
 // The step reads as one ordered list of stages (Box2D's solver stages, MuJoCo's mj_forward):
-//   forces:    [gravity] [drag] [wind] [struts] [hinges]   (evaluated 1-4 times per step)
+//   forces:    [gravity] [drag] [wind] [struts] [hinges] [gas]   (evaluated 1-4 times per step)
 //   integrate: the chosen integrator advances positions and velocities by dt
 //   collide:   [static colliders]                          (continuous, earliest hit wins)
 // A stage is in the list only if the scene uses it: no wind stage without wind, no hinge stage
@@ -44,7 +44,7 @@ bool parseIntegrator(std::string_view name, Integrator& out);
 // Comma-separated list of all names, for error messages.
 std::string integratorNames();
 
-enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges };
+enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges, Gas };
 std::string_view forceStageName(ForceStage stage);
 
 class ImplicitSolver;
@@ -99,6 +99,10 @@ class World {
   template <class F>
   void forVertices(F&& fn) const;
   void collide();
+  // The gas stage's pressures for positions x: each gas body's volume (chunks of faces summed
+  // by the threads, then the chunks' sums in order: enclosedVolume's number on every thread
+  // count), then its overpressure.
+  void updateGas(const Vec3* x) const;
 
   // A thread's share: the vertices it owns, [begin, end), and the elements that touch them.
   struct Share {
@@ -121,6 +125,13 @@ class World {
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
   std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel
+  std::vector<uint32_t> gasBodies_;            // bodies that hold gas
+  struct VolumeChunk {
+    uint32_t body, begin, end;  // faces [begin, end) of a gas body
+  };
+  std::vector<VolumeChunk> volumeChunks_;      // in body and face order
+  mutable std::vector<double> chunkSum_;       // per chunk: six times its volume
+  mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
 };

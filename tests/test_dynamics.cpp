@@ -254,6 +254,11 @@ TEST(Stages, ASceneAssemblesOnlyTheStagesItUses) {
   EXPECT_EQ(full.forceStages(), (std::vector<ForceStage>{ForceStage::Gravity, ForceStage::Drag, ForceStage::Wind,
                                                          ForceStage::Struts, ForceStage::Hinges}));
   EXPECT_TRUE(full.collides());
+  // Gas is a stage only for a body that holds it.
+  Model balloon = ballModel({}, 0.05, 0.5, 1.0);
+  balloon.bodies[0].gasPressure = 100.0;
+  EXPECT_EQ(World(balloon, Integrator::RK4, 1e-3).forceStages(),
+            (std::vector<ForceStage>{ForceStage::Struts, ForceStage::Hinges, ForceStage::Gas}));
   // The legacy all-pairs model has no hinge stage.
   Model legacy;
   BodyDesc cube;

@@ -16,8 +16,8 @@
 namespace springy {
 namespace {
 
-// Every force stage and both collider kinds: two bodies (one pinned) with drag and gusting
-// wind, a ground plane and a tilted plate they fall onto.
+// Every force stage and both collider kinds: two bodies (one pinned, one holding gas) with drag
+// and gusting wind, a ground plane and a tilted plate they fall onto.
 const char* kAllStages = R"(
 [scene]
 dt = 0.001
@@ -37,6 +37,7 @@ position = [0.0, 1.6, 0.0]
 velocity = [0.5, -2.0, 0.0]
 strut_period = 0.05
 hinge_period = 0.2
+volume_period = 0.03
 [[body]]
 name = "hanging"
 shape = "octahedron_sphere"

@@ -280,6 +280,7 @@ TEST(SceneErrors, OutOfRangeValues) {
   expectError(kBody + "[[plane]]\nfriction = -0.1\n", 8, {"'friction'"});
   expectError("[[body]]\nradius = -2\n", 2, {"'radius'", "positive", "-2"});
   expectError("[[body]]\nmass = 0\n", 2, {"'mass'", "positive"});
+  expectError("[[body]]\nvolume_period = -0.1\n", 2, {"'volume_period'", "positive", "-0.1"});
   expectError("[[body]]\nsubdivisions = 0\n", 2, {"'subdivisions'", "between 1 and 256", "0"});
   expectError("[scene]\ndt = -0.001\n" + kBody, 2, {"'dt'", "positive"});
   expectError("[[body]]\nscale = [1, 0, 1]\n", 2, {"'scale'", "positive"});

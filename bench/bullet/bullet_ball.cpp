@@ -309,6 +309,7 @@ int main(int argc, char** argv) {
                 -minY, setupSeconds);
   }
 
+  double maxStrain = 0.0;  // largest |l - l0| / l0 of a mesh edge over the run (springy check's "max strain")
   double minRatio = 1.0, maxRatio = 1.0, ratio = 1.0, lowest = centerY, endLowest = centerY, stepSeconds = 0.0;
   long failedStep = -1;
   std::string failure;
@@ -318,6 +319,12 @@ int main(int argc, char** argv) {
     world->stepSimulation(dt, 0);  // maxSubSteps 0: exactly one step of dt
     stepSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ratio = enclosedVolume(*body, mesh.triangles) / restVolume;
+    for (int k = 0; k < body->m_links.size(); ++k) {
+      const btSoftBody::Link& link = body->m_links[k];
+      if (link.m_bbending) continue;  // the mesh edges only (randomizeConstraints shuffled the links)
+      const double l = static_cast<double>((link.m_n[1]->m_x - link.m_n[0]->m_x).length());
+      maxStrain = std::max(maxStrain, std::fabs(l - static_cast<double>(link.m_rl)) / static_cast<double>(link.m_rl));
+    }
     minRatio = std::min(minRatio, ratio);
     maxRatio = std::max(maxRatio, ratio);
     btVector3 lo = body->m_nodes[0].m_x, hi = lo;
@@ -349,6 +356,7 @@ int main(int argc, char** argv) {
   if (!opt.quiet) {
     std::printf("  %ld steps in %.3f s of wall time (%.3f s in stepSimulation), %.0f ns per vertex per step\n", done,
                 wall, stepSeconds, nsPerVertexStep);
+    std::printf("  max edge strain %.4f\n", maxStrain);
     std::printf("  volume: min %.4f, max %.4f, end %.4f of rest; lowest vertex %.4f m (at the end %.4f m); end "
                 "centroid y %.4f m\n",
                 minRatio, maxRatio, ratio, lowest, endLowest, static_cast<double>(centroid.y()));
@@ -357,10 +365,10 @@ int main(int argc, char** argv) {
   }
   std::printf("result dt=%.9g piterations=%d steps=%ld vertices=%d min_volume=%.6f end_volume=%.6f max_volume=%.6f "
               "wall_s=%.6f step_s=%.6f ns_per_vertex_step=%.1f lowest_y=%.6f end_lowest_y=%.6f end_centroid_y=%.6f links=%d "
-              "setup_s=%.3f status=%s\n",
+              "setup_s=%.3f max_strain=%.6f status=%s\n",
               opt.dt, opt.piterations, done, nVertices, minRatio, ratio, maxRatio, wall, stepSeconds, nsPerVertexStep,
               lowest, endLowest, static_cast<double>(centroid.y()), edgeLinks + bendLinks, setupSeconds,
-              failedStep > 0 ? "fail" : "ok");
+              maxStrain, failedStep > 0 ? "fail" : "ok");
 
   world->removeSoftBody(body);
   delete body;

@@ -167,6 +167,25 @@ bool Colliders::resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting
   return touched;
 }
 
+bool Colliders::dampingLayers() const {
+  for (const PlaneCollider& pl : planes) {
+    if (pl.damping > 0.0 && pl.layer > 0.0) return true;
+  }
+  return false;
+}
+
+bool Colliders::dampInLayers(const Vec3& x, Vec3& velocity, double dt) const {
+  bool inside = false;
+  for (const PlaneCollider& pl : planes) {
+    if (!(pl.damping > 0.0)) continue;
+    const double height = dot(x - pl.point, pl.normal);
+    if (height > pl.layer) continue;
+    velocity -= pl.normal * (dot(velocity, pl.normal) * -std::expm1(-pl.damping * dt));
+    inside = true;
+  }
+  return inside;
+}
+
 double Colliders::planePenetration(const Vec3& p) const {
   double depth = 0.0;
   for (const PlaneCollider& pl : planes) depth = std::max(depth, -dot(p - pl.point, pl.normal));

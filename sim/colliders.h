@@ -37,6 +37,13 @@ struct PlaneCollider {
   Vec3 point;
   Vec3 normal;  // unit, pointing out of the solid
   ContactMaterial material;
+  // Soft ground (mud, sand, turf): a viscous layer of this thickness [m] above the surface
+  // damps the normal velocity of every vertex in it at `damping` [1/s]. A body rolling on it
+  // is pressed into the layer at its leading side and lifts out at its trailing side; the layer
+  // resists both, which is rolling resistance (the normal force shifted forward, as hysteresis
+  // in a real contact does). 0: a hard surface.
+  double damping = 0.0;
+  double layer = 0.0;
 };
 
 // A static triangle mesh with its own BVH (built once by the constructor of Colliders).
@@ -79,6 +86,12 @@ struct Colliders {
   bool resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting) const;
   // Largest depth of a point behind any plane (0 when in front of all) [m].
   double planePenetration(const Vec3& p) const;
+  // Whether any plane has a damping layer.
+  bool dampingLayers() const;
+  // Damps the normal velocity of a vertex at x inside a plane's damping layer over a step dt:
+  // v_n -> v_n exp(-damping dt) (exact for the layer's linear drag, so never more than v_n).
+  // Returns whether the vertex is in a layer.
+  bool dampInLayers(const Vec3& x, Vec3& velocity, double dt) const;
 };
 
 // Velocity after an impact with a surface of unit normal n (restitution along n, Coulomb

@@ -458,6 +458,11 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
       if (!(length(normal) > 0.0)) r.fail(*nn, "normal", "must not be zero");
       p.collider.normal = normalized(normal);
       p.collider.material = readContact(r);
+      p.collider.damping = r.inRange("damping", 0.0, 0.0, 1e6);
+      p.collider.layer = r.inRange("damping_layer", 0.0, 0.0, 1e6);
+      if ((p.collider.damping > 0.0) != (p.collider.layer > 0.0)) {
+        r.failHere("soft ground needs both damping (the rate, 1/s) and damping_layer (the thickness, m) positive");
+      }
       p.material = readMaterial(r, Material{{0.575, 0.54, 0.54}, 1.0, 8.0});
       p.visible = r.boolean("visible", true);
       p.extent = r.positive("extent", p.extent);

@@ -87,6 +87,7 @@ World::World(Model model, Integrator integrator, double dt)
   for (TriangleCollider& tc : model_.colliders.meshes) {
     if (tc.nodes.empty()) tc.buildBvh();
   }
+  dampingLayers_ = model_.colliders.dampingLayers();
 
   const std::size_t n = model_.vertexCount();
   x_ = model_.restPosition;
@@ -360,13 +361,15 @@ void World::step() {
 void World::collide() {
   const Colliders& colliders = model_.colliders;
   std::atomic<bool> touched{false};
+  const bool layers = dampingLayers_;
   forVertices([&](std::size_t begin, std::size_t end) {
     bool hitAny = false;
     for (std::size_t i = begin; i < end; ++i) {
       if (model_.invMass[i] == 0.0) continue;  // pinned
       const bool hit = colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
       sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
-      hitAny = hitAny || hit;
+      const bool damped = layers && colliders.dampInLayers(x_[i], v_[i], dt_);
+      hitAny = hitAny || hit || damped;
     }
     if (hitAny) touched.store(true, std::memory_order_relaxed);
   });

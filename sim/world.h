@@ -3,7 +3,7 @@
 // The step reads as one ordered list of stages (Box2D's solver stages, MuJoCo's mj_forward):
 //   forces:    [gravity] [drag] [wind] [struts] [hinges] [gas]   (evaluated 1-4 times per step)
 //   integrate: the chosen integrator advances positions and velocities by dt
-//   collide:   [static colliders]                          (continuous, earliest hit wins)
+//   collide:   [static colliders] [damping layers]         (continuous, earliest hit wins)
 // A stage is in the list only if the scene uses it: no wind stage without wind, no hinge stage
 // for the legacy all-pairs model, no collision pass without colliders. An unused feature costs
 // nothing per step.
@@ -122,6 +122,7 @@ class World {
   mutable std::vector<Vec3> forceScratch_;
   std::vector<uint16_t> sinceContact_;  // steps since each vertex last touched a collider
   int restingSteps_ = 0;                // contact within this many steps is resting contact
+  bool dampingLayers_ = false;          // a plane has a damping layer (soft ground)
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
   std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel

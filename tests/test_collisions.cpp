@@ -551,5 +551,72 @@ TEST(Resting, SoftBallDroppedOnTheGroundComesToRestWithoutGainingEnergy) {
 }
 
 
+
+// ---------------------------------------------------------------------------------------------
+// Soft ground: a damping layer above a plane.
+
+TEST(SoftGround, NormalVelocityDecaysAtTheLayersRateAndNothingElseChanges) {
+  for (const double height : {0.2, 0.6}) {  // inside and above a 0.5 m layer
+    Model model = vertexModel({0, height, 0}, {2.0, 0.01, -0.5}, {});
+    PlaneCollider ground{{0, 0, 0}, {0, 1, 0}, {}};
+    ground.damping = 10.0;
+    ground.layer = 0.5;
+    model.colliders.planes.push_back(ground);
+    const double dt = 1e-3;
+    World world(std::move(model), Integrator::SymplecticEuler, dt);
+    for (int s = 0; s < 100; ++s) world.step();
+    const Vec3 v = world.velocities()[0];
+    EXPECT_EQ(v.x, 2.0);
+    EXPECT_EQ(v.z, -0.5);
+    if (height < 0.5) EXPECT_NEAR(v.y, 0.01 * std::exp(-10.0 * 100 * dt), 1e-15);  // e^-1
+    else EXPECT_EQ(v.y, 0.01);
+  }
+}
+
+TEST(SoftGround, GivesARollingBallRollingResistance) {
+  // A soft ball rolling at 2 m/s: on hard ground it rolls on; in a damping layer (its leading
+  // side pressed in, its trailing side lifting out, both resisted) it stops, and no energy is
+  // gained on the way.
+  double travelled[2], speed[2];
+  for (int soft = 0; soft < 2; ++soft) {
+    Model model;
+    model.gravity = {0, -kG, 0};
+    BodyDesc desc;
+    desc.name = "ball";
+    desc.mesh = makeIcosphere(1.0, 2);
+    for (Vec3& p : desc.mesh.positions) p.y += 1.0;
+    desc.mass = 1.0;
+    desc.strutPeriod = 0.05;
+    desc.strutDecay = 0.03;
+    desc.hingePeriod = 0.3;
+    desc.hingeDecay = 1.0;
+    desc.velocity = {2.0, 0, 0};
+    desc.angularVelocity = {0, 0, -2.0};  // rolling: v = omega x r at the contact is 0
+    addBody(model, desc);
+    const double dt = 1e-3;
+    PlaneCollider ground{{0, 0, 0}, {0, 1, 0}, {0.6, 0.3}};
+    if (soft) ground.damping = 40.0, ground.layer = 0.3;
+    model.colliders.planes.push_back(ground);
+    model.colliders.restingSpeed = 4 * kG * dt;
+    World world(std::move(model), Integrator::SymplecticEuler, dt);
+    const double x0 = measureBody(world, 0).centroid.x;
+    double lowest = measureBody(world, 0).total(), rise = 0.0;
+    for (int s = 0; s < 6000; ++s) {
+      world.step();
+      const double e = measureBody(world, 0).total();
+      rise = std::max(rise, e - lowest);
+      lowest = std::min(lowest, e);
+    }
+    const BodyMeasures end = measureBody(world, 0);
+    travelled[soft] = end.centroid.x - x0;
+    speed[soft] = end.momentum.x / 1.0;
+    EXPECT_LT(rise, 1e-3) << (soft ? "soft" : "hard") << " ground gained energy";
+  }
+  EXPECT_GT(speed[0], 0.5) << "hard ground";  // still rolling after 6 s (from 2 m/s)
+  EXPECT_GT(travelled[0], 6.0) << "hard ground";
+  EXPECT_LT(std::fabs(speed[1]), 0.05) << "soft ground";  // stopped
+  EXPECT_LT(travelled[1], 0.5 * travelled[0]) << "soft ground";
+}
+
 }  // namespace
 }  // namespace springy

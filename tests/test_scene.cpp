@@ -278,6 +278,8 @@ TEST(SceneErrors, MissingMeshFileNamesTheSceneLineKeyAndPath) {
 TEST(SceneErrors, OutOfRangeValues) {
   expectError(kBody + "[[plane]]\nrestitution = 1.5\n", 8, {"'restitution'", "[0, 1]", "1.5"});
   expectError(kBody + "[[plane]]\nfriction = -0.1\n", 8, {"'friction'"});
+  expectError(kBody + "[[plane]]\ndamping = 20\n", 7, {"[[plane]]", "damping_layer"});
+  expectError(kBody + "[[plane]]\ndamping = -1\ndamping_layer = 0.5\n", 8, {"'damping'"});
   expectError("[[body]]\nradius = -2\n", 2, {"'radius'", "positive", "-2"});
   expectError("[[body]]\nmass = 0\n", 2, {"'mass'", "positive"});
   expectError("[[body]]\nvolume_period = -0.1\n", 2, {"'volume_period'", "positive", "-0.1"});

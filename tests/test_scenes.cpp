@@ -123,7 +123,7 @@ TEST(Scenes, HangingSphereKeepsItsPolePinnedAndSettlesBelowRest) {
   EXPECT_GT(m.volume / run.world.model().bodies[0].restVolume, 0.95);
 }
 
-TEST(Scenes, RampBallTouchesThePlatesInTurnAndEndsOnTheGround) {
+TEST(Scenes, RampBallTouchesThePlatesInTurnAndEndsAtRestOnTheGround) {
   SceneRun run("ramp");
   const TriangleCollider& plates = run.world.model().colliders.meshes.at(0);
   ASSERT_EQ(plates.mesh.triangles.size(), 8u);  // four quads
@@ -137,7 +137,7 @@ TEST(Scenes, RampBallTouchesThePlatesInTurnAndEndsOnTheGround) {
   };
   std::array<double, 4> firstTouch{-1, -1, -1, -1};
   double landed = -1;
-  run.advance(16.0, [&] {
+  run.advanceToEnd([&] {
     for (const Vec3& p : run.world.positions()) {
       for (int k = 0; k < 4; ++k) {
         if (firstTouch[static_cast<std::size_t>(k)] < 0 && nearPlate(p, k)) firstTouch[static_cast<std::size_t>(k)] = run.world.time();
@@ -150,6 +150,7 @@ TEST(Scenes, RampBallTouchesThePlatesInTurnAndEndsOnTheGround) {
   EXPECT_GT(landed, firstTouch[3]);
   EXPECT_NEAR(run.lowest(0), -40.0, 0.05);  // on the ground at the end
   EXPECT_LT(std::fabs(run.body(0).centroid.x), 30.0);  // still in the camera's view
+  EXPECT_TRUE(run.restsAtEnd(0));  // the soft ground's rolling resistance stopped it
 }
 
 TEST(Scenes, LegacyCubeKeepsItsVolume) {

@@ -374,6 +374,15 @@ std::vector<CaseFactory> stabilityCases() {
     for (Vec3& p : c.positions) p.y *= 0.7;
     return c;
   });
+  add("stiff gas", false, true, [] {
+    // The gas is the stiff term, and it stiffens as the volume falls (p V = const).
+    BodyDesc desc = ball(0.05, 0.1, 0.0, 0.0);
+    desc.volumePeriod = 0.0002;
+    StabilityCase c = fromBody("stiff gas", "icosphere, P = 50 ms, no hinges, gas P_V = 0.2 ms, released squashed to 0.7",
+                               desc);
+    for (Vec3& p : c.positions) p.y *= 0.7;
+    return c;
+  });
   add("overdamped", false, true, [] {
     StabilityCase c = fromBody("overdamped", "icosphere, P = 50 ms, T = 0.1 ms (T << P: damping is the stiff term)",
                                ball(0.05, 1e-4, 0.5, 2.0));

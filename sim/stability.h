@@ -38,7 +38,9 @@ struct RowBound {
   double strutStiffness = 0, hingeStiffness = 0, strutDamping = 0, hingeDamping = 0, drag = 0;
   // The enclosed gas's breathing mode, omega^2 = (p0 V0 / V^2) sum_j |g_j|^2 / m_j: one
   // eigenvalue of the whole body, added to every row (the largest eigenvalue of a sum is at
-  // most the sum of the largest eigenvalues).
+  // most the sum of the largest eigenvalues). The pressure's curvature term p d^2V/dx^2 is left
+  // out: it vanishes at rest, but in a strongly compressed body the limit is then optimistic
+  // (docs/stability.md, "stiff gas": measured 0.3-0.8 of the prediction).
   double gasStiffness = 0;
 };
 

@@ -32,9 +32,12 @@ std::string describe(const World& world, uint32_t body, const std::string& what,
   return s.str();
 }
 
-const char* kStepAdvice =
-    "Try a smaller dt or more substeps (--substeps), a more stable integrator (rk4, verlet), or softer springs "
-    "(longer strut_period / hinge_period); `springy suggest` estimates a stable dt.";
+// What to try after an instability; a body with gas also has a volume_period to lengthen.
+std::string stepAdvice(const BodyInfo& body) {
+  return std::string("Try a smaller dt or more substeps (--substeps), a more stable integrator (rk4, verlet), or "
+                     "softer springs (longer strut_period / hinge_period") +
+         (body.gasPressure > 0.0 ? " / volume_period" : "") + "); `springy suggest` estimates a stable dt.";
+}
 
 }  // namespace
 
@@ -68,11 +71,11 @@ std::optional<Failure> Monitor::check(const World& world) {
     auto fail = [&](const std::string& what, const std::string& advice) {
       return Failure{b, world.stepCount(), world.time(), describe(world, b, what, advice)};
     };
-    if (!m.finite) return fail("a position or velocity is NaN or infinite", kStepAdvice);
+    if (!m.finite) return fail("a position or velocity is NaN or infinite", stepAdvice(info));
     if (m.size > limits_.sizeFactor * info.restSize) {
       std::ostringstream s;
       s << "it blew up to " << m.size / info.restSize << " times its rest size";
-      return fail(s.str(), kStepAdvice);
+      return fail(s.str(), stepAdvice(info));
     }
     // Nothing injects energy, so the total may only fall: a rise above the lowest total so far
     // (not only above the start: a body that has lost most of its energy and gains it back at
@@ -83,7 +86,7 @@ std::optional<Failure> Monitor::check(const World& world) {
       s << "its total energy rose from " << reference << " J";
       if (limits_.energyFromLowest) s << " (its lowest, at t = " << r.lowestTotalTime << " s)";
       s << " to " << m.total() << " J although nothing injects energy (the integration is unstable or too coarse)";
-      return fail(s.str(), kStepAdvice);
+      return fail(s.str(), stepAdvice(info));
     }
     if (m.total() < r.lowestTotal) r.lowestTotal = m.total(), r.lowestTotalTime = world.time();
     if (m.penetration > limits_.penetration * info.restSize) {

@@ -95,4 +95,23 @@ TEST(Suggest, FlagsTheUnstableStepAndProposesParameters) {
   EXPECT_NE(r.output.find("strut_period >="), std::string::npos) << r.output;
 }
 
+TEST(Suggest, NamesTheGasAndProposesALongerVolumePeriod) {
+  const std::string scene = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/app/gas.toml";
+  const Result r = run("suggest " + scene);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("0 hinges, gas)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("UNSTABLE"), std::string::npos) << r.output;
+  // The gas alone limits the step: omega = 2 pi / 2 ms, so symplectic Euler needs
+  // volume_period >= 2 pi dt / 2 / 0.9 (the advisor's safety factor) = 6.98 ms.
+  const std::size_t at = r.output.find("volume_period >= ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const double proposed = std::stod(r.output.substr(at + 17));
+  EXPECT_NEAR(proposed, 2 * 3.141592653589793 * 0.002 / 2 / 0.9, 0.05 * proposed) << r.output;
+  // And the run at the scene's values is stopped, naming the body.
+  const Result c = run("check " + scene);
+  EXPECT_NE(c.status, 0);
+  EXPECT_NE(c.output.find("body 'balloon'"), std::string::npos) << c.output;
+  EXPECT_NE(c.output.find("/ volume_period)"), std::string::npos) << c.output;
+}
+
 }  // namespace

@@ -84,6 +84,16 @@ struct Colliders {
   // `resting`: the vertex is in sustained contact (touched a collider within restingWindow).
   // Returns true if any contact happened.
   bool resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting) const;
+  // No collider can be hit on a path that ends at p: there are no triangle meshes and p is on
+  // or in front of every plane (firstHit finds nothing then). Inline: most vertices of most
+  // steps take only this test.
+  bool clearAt(const Vec3& p) const {
+    if (!meshes.empty()) return false;
+    for (const PlaneCollider& pl : planes) {
+      if (dot(p - pl.point, pl.normal) < 0.0) return false;
+    }
+    return true;
+  }
   // Largest depth of a point behind any plane (0 when in front of all) [m].
   double planePenetration(const Vec3& p) const;
   // Whether any plane has a damping layer.

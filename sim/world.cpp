@@ -366,7 +366,8 @@ void World::collide() {
     bool hitAny = false;
     for (std::size_t i = begin; i < end; ++i) {
       if (model_.invMass[i] == 0.0) continue;  // pinned
-      const bool hit = colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
+      const bool hit =
+          !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
       sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
       const bool damped = layers && colliders.dampInLayers(x_[i], v_[i], dt_);
       hitAny = hitAny || hit || damped;

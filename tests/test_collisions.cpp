@@ -509,20 +509,25 @@ TEST(Plate, NoCrackAlongTheSharedDiagonal) {
 
 // On a bouncy floor (restitution 0.6) the ball still comes to rest: the vertices its springs press
 // into the ground are in resting contact and do not bounce every other step.
+// A soft ball (icosphere level 2, radius 1, 1 kg) with its centre at height y.
+BodyDesc softBall(double y) {
+  BodyDesc desc;
+  desc.name = "ball";
+  desc.mesh = makeIcosphere(1.0, 2);
+  for (Vec3& p : desc.mesh.positions) p.y += y;
+  desc.mass = 1.0;
+  desc.strutPeriod = 0.05;
+  desc.strutDecay = 0.03;
+  desc.hingePeriod = 0.3;
+  desc.hingeDecay = 1.0;
+  return desc;
+}
+
 TEST(Resting, SoftBallDroppedOnTheGroundComesToRestWithoutGainingEnergy) {
   for (Integrator integrator : {Integrator::SymplecticEuler, Integrator::RK4}) {
     Model model;
     model.gravity = {0, -kG, 0};
-    BodyDesc desc;
-    desc.name = "ball";
-    desc.mesh = makeIcosphere(1.0, 2);
-    for (Vec3& p : desc.mesh.positions) p.y += 1.3;  // 0.3 m above the ground
-    desc.mass = 1.0;
-    desc.strutPeriod = 0.05;
-    desc.strutDecay = 0.03;
-    desc.hingePeriod = 0.3;
-    desc.hingeDecay = 1.0;
-    addBody(model, desc);
+    addBody(model, softBall(1.3));  // 0.3 m above the ground
     const double dt = 1e-3;
     model.colliders.planes.push_back({{0, 0, 0}, {0, 1, 0}, {0.6, 0.3}});
     model.colliders.restingSpeed = 4 * kG * dt;
@@ -581,15 +586,7 @@ TEST(SoftGround, GivesARollingBallRollingResistance) {
   for (int soft = 0; soft < 2; ++soft) {
     Model model;
     model.gravity = {0, -kG, 0};
-    BodyDesc desc;
-    desc.name = "ball";
-    desc.mesh = makeIcosphere(1.0, 2);
-    for (Vec3& p : desc.mesh.positions) p.y += 1.0;
-    desc.mass = 1.0;
-    desc.strutPeriod = 0.05;
-    desc.strutDecay = 0.03;
-    desc.hingePeriod = 0.3;
-    desc.hingeDecay = 1.0;
+    BodyDesc desc = softBall(1.0);  // on the ground
     desc.velocity = {2.0, 0, 0};
     desc.angularVelocity = {0, 0, -2.0};  // rolling: v = omega x r at the contact is 0
     addBody(model, desc);

@@ -177,7 +177,10 @@ ImplicitSolver::ImplicitSolver(const Model& model, ImplicitSettings settings) : 
                            static_cast<Eigen::Index>(3 * model.bodies[b].vertexCount));
   }
   gasCoefficient_.assign(gasBodies_.size(), 0.0);
-  if (!gasBodies_.empty()) gasGradient_.setZero(dim);
+  if (!gasBodies_.empty()) {
+    gasGradient_.setZero(dim);
+    gasScratch_.assign(n_, Vec3{});
+  }
   contacts_.reserve(n_);
   xSaved_.assign(static_cast<std::size_t>(settings_.maxHalvings), std::vector<Vec3>(n_));
   vSaved_.assign(static_cast<std::size_t>(settings_.maxHalvings), std::vector<Vec3>(n_));
@@ -242,13 +245,9 @@ void ImplicitSolver::assemble(const Model& model, const Vec3* x, const Vec3* v, 
 void ImplicitSolver::assembleGas(const Model& model, const Vec3* x, double dt) {
   for (std::size_t k = 0; k < gasBodies_.size(); ++k) {
     const BodyInfo& info = model.bodies[gasBodies_[k]];
-    gasGradient_.segment(gasRange_[k].first, gasRange_[k].second).setZero();
-    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
-      const Triangle& t = model.faces[f];
-      const Vec3 n = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) / 6.0;
-      for (uint32_t i : t) {
-        for (int c = 0; c < 3; ++c) gasGradient_(static_cast<Eigen::Index>(3 * i) + c) += n[c];
-      }
+    volumeGradient(model, info, x, gasScratch_.data());
+    for (uint32_t i = 0; i < info.vertexCount; ++i) {
+      for (int c = 0; c < 3; ++c) gasGradient_(gasRange_[k].first + 3 * static_cast<Eigen::Index>(i) + c) = gasScratch_[i][c];
     }
     const double volume = enclosedVolume(model, gasBodies_[k], x);
     gasCoefficient_[k] = volume > 0.0 ? dt * dt * info.gasPressure * info.restVolume / (volume * volume) : 0.0;

@@ -149,6 +149,7 @@ class ImplicitSolver {
   std::vector<std::pair<Eigen::Index, Eigen::Index>> gasRange_;  // per gas body: first row, rows
   std::vector<double> gasCoefficient_;  // per gas body: h^2 p0 V0 / V^2
   Eigen::VectorXd gasGradient_;        // dV/dx of each gas body's vertices (0 elsewhere)
+  std::vector<Vec3> gasScratch_;       // one body's gradient, per vertex
 };
 
 }  // namespace springy

@@ -271,14 +271,19 @@ void addBody(Model& model, const BodyDesc& desc) {
   model.bodies.push_back(info);
 }
 
-double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x) {
-  // g_i = dV/dx_i: each face adds (x1 - x0) x (x2 - x0) / 6 to each of its corners.
-  std::vector<Vec3> g(body.vertexCount);
+void volumeGradient(const Model& model, const BodyInfo& body, const Vec3* x, Vec3* g) {
+  // Each face adds (x1 - x0) x (x2 - x0) / 6, a third of its area vector, to each corner.
+  std::fill(g, g + body.vertexCount, Vec3{});
   for (uint32_t f = body.firstFace; f < body.firstFace + body.faceCount; ++f) {
     const Triangle& t = model.faces[f];
     const Vec3 n = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) / 6.0;
     for (uint32_t i : t) g[i - body.firstVertex] += n;
   }
+}
+
+double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x) {
+  std::vector<Vec3> g(body.vertexCount);
+  volumeGradient(model, body, x, g.data());
   double sum = 0.0;
   for (uint32_t k = 0; k < body.vertexCount; ++k) sum += lengthSquared(g[k]) * model.invMass[body.firstVertex + k];
   return sum;

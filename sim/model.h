@@ -131,6 +131,9 @@ void addBody(Model& model, const BodyDesc& desc);
 // against the gas alone) the angular frequency 2 pi / period: omega^2 = p0 sum_i |g_i|^2 / m_i
 // / V0, with g_i = dV/dx_i at rest. Pinned vertices do not take part.
 double gasPressureFromPeriod(const Model& model, const BodyInfo& body, double period);
+// g_k = dV/dx_k of a closed body's enclosed volume for its vertices k = 0 .. vertexCount - 1
+// (body-local) at positions x (global).
+void volumeGradient(const Model& model, const BodyInfo& body, const Vec3* x, Vec3* g);
 // sum_i |dV/dx_i|^2 / m_i over a body's free vertices at positions x [m^4 / kg].
 double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x);
 

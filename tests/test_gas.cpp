@@ -45,11 +45,7 @@ Model gasBall(int level, double volumePeriod, double strutStiffness, double hing
 // order: in the linearised dynamics the body then moves in that direction only.
 std::vector<Vec3> breathingStart(const Model& model, double eps) {
   std::vector<Vec3> g(model.vertexCount());
-  const Vec3* x = model.restPosition.data();
-  for (const Triangle& t : model.faces) {
-    const Vec3 n = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) / 6.0;
-    for (uint32_t i : t) g[i] += n;
-  }
+  volumeGradient(model, model.bodies[0], model.restPosition.data(), g.data());
   double gMg = 0.0;
   for (std::size_t i = 0; i < g.size(); ++i) gMg += lengthSquared(g[i]) * model.invMass[i];
   const double scale = eps * model.bodies[0].restVolume / gMg;

@@ -2,6 +2,7 @@
 // from their files exactly as `springy check` and `springy render` load them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <cmath>
@@ -178,6 +179,51 @@ TEST(Scenes, JellyWobblesAndRecoversItsShape) {
   EXPECT_GT(start.gravitational - end.gravitational, 500.0);  // 6 kg dropped about 10 m
   EXPECT_TRUE(run.restsAtEnd(0));  // the wobble has died out
   EXPECT_LT(run.lowest(0), 1e-3);
+}
+
+TEST(Scenes, FullBunnyLandsAndKeepsItsShape) {
+  // 1839 vertices: through the impact (at about 1.4 s) and the first rebound.
+  SceneRun run("bunny");
+  EXPECT_EQ(run.world.model().bodies[0].vertexCount, 1839u);
+  const double startHeight = run.height(0);
+  run.advance(3.0);
+  const BodyRecord& r = run.monitor.records()[0];
+  EXPECT_LT(run.lowest(0), 1.0);  // down on the ground (it fell from about 10)
+  EXPECT_GT(r.minVolumeRatio, 0.85);  // the scene file's stated lowest volume
+  EXPECT_GT(run.body(0).volume / run.world.model().bodies[0].restVolume, 0.95);
+  EXPECT_GT(run.height(0), 0.9 * startHeight);  // ears up again
+}
+
+TEST(Scenes, SampleBodiesLandOnTheirPlatesAndOnThePlane) {
+  // The cube and the icosphere fall onto the two tilted plates, the tetrahedron and the bunny
+  // onto the plane.
+  SceneRun run("sample");
+  const TriangleCollider& plates = run.world.model().colliders.meshes.at(0);
+  ASSERT_EQ(plates.mesh.triangles.size(), 4u);  // two quads
+  auto onPlate = [&](uint32_t b, int k) {  // a vertex of body b within 5 cm of plate k, inside its x extent
+    const Triangle& t = plates.mesh.triangles[static_cast<std::size_t>(2 * k)];
+    const Vec3 a = plates.mesh.positions[t[0]], p1 = plates.mesh.positions[t[1]], c = plates.mesh.positions[t[2]];
+    const Vec3 n = normalized(cross(p1 - a, c - a));
+    const double lo = std::min({a.x, p1.x, c.x}), hi = std::max({a.x, p1.x, c.x});
+    const BodyInfo& info = run.world.model().bodies[b];
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      const Vec3& x = run.world.positions()[i];
+      if (std::fabs(dot(x - a, n)) < 0.05 && x.x >= lo && x.x <= hi) return true;
+    }
+    return false;
+  };
+  std::array<bool, 4> plate{}, ground{};
+  run.advance(5.0, [&] {
+    for (uint32_t b = 0; b < 4; ++b) {
+      plate[b] = plate[b] || onPlate(b, b == 0 ? 0 : 1);
+      ground[b] = ground[b] || run.lowest(b) < 0.05;
+    }
+  });
+  EXPECT_TRUE(plate[0]) << "the cube never touched the first plate";
+  EXPECT_TRUE(plate[1]) << "the icosphere never touched the second plate";
+  EXPECT_TRUE(ground[2]) << "the tetrahedron never reached the plane";
+  EXPECT_TRUE(ground[3]) << "the bunny never reached the plane";
+  for (uint32_t b = 0; b < 4; ++b) EXPECT_GT(run.monitor.records()[b].minVolumeRatio, 0.7) << b;
 }
 
 TEST(Scenes, LightBunnyStaysStableAndKeepsItsShape) {

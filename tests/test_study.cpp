@@ -52,7 +52,7 @@ TEST(StudyAccuracy, MeasuredOrdersMatchTheoryWithinTwoTenths) {
     EXPECT_NEAR(std::stod(order), std::stod(theory), 0.2) << line;
     ++checked;
   }
-  EXPECT_EQ(checked, 12);  // strut and hinge x six integrators
+  EXPECT_EQ(checked, 18);  // strut, hinge and gas x six integrators
   // The report: every point, a Markdown table with the machine, and the plots it references.
   EXPECT_TRUE(fs::exists(dir / "accuracy.csv"));
   std::ifstream md(dir / "accuracy.md");

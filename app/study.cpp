@@ -113,6 +113,14 @@ std::vector<double> ladder(double first, int count) {
   return d;
 }
 
+// The case's reference: RK4 from its start to its end time at its finest step / divisor.
+void referenceByRk4(AccuracyCase& c, double divisor) {
+  const Model model = c.model;
+  const std::vector<Vec3> x0 = c.x0;
+  const double dt = c.dts.back() / divisor, end = c.endTime;
+  c.reference = [=] { return runTo(model, x0, Integrator::RK4, dt, end); };
+}
+
 AccuracyCase strutAccuracy(double damping) {
   // Two masses (1 and 0.5 kg) on one strut (k = 30 N/m), released stretched by 0.1 m, at rest:
   // the relative coordinate y = l - l0 is a damped oscillator mu y'' = -k y - d y'.
@@ -163,10 +171,7 @@ AccuracyCase hingeAccuracy() {
   c.endTime = 1.0;
   c.dts = ladder(0.0025, 6);
   c.size = c.model.bodies[0].restSize;
-  const Model model = c.model;
-  const std::vector<Vec3> x0 = c.x0;
-  const double ref = c.dts.back() / 16;
-  c.reference = [=] { return runTo(model, x0, Integrator::RK4, ref, 1.0); };
+  referenceByRk4(c, 16);
   return c;
 }
 
@@ -194,10 +199,7 @@ AccuracyCase gasAccuracy() {
   c.endTime = 0.5;
   c.dts = ladder(0.005, 6);
   c.size = c.model.bodies[0].restSize;
-  const Model model = c.model;
-  const std::vector<Vec3> x0 = c.x0;
-  const double ref = c.dts.back() / 16, end = c.endTime;
-  c.reference = [=] { return runTo(model, x0, Integrator::RK4, ref, end); };
+  referenceByRk4(c, 16);
   return c;
 }
 
@@ -244,9 +246,7 @@ AccuracyCase sceneAccuracy(const std::string& path) {
   double size = 0;
   for (const BodyInfo& b : model.bodies) size = std::max(size, b.restSize);
   c.size = size;
-  const double ref = c.dts.back() / 8;
-  const double end = c.endTime;
-  c.reference = [model, ref, end] { return runTo(model, model.restPosition, Integrator::RK4, ref, end); };
+  referenceByRk4(c, 8);
   return c;
 }
 

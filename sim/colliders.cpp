@@ -177,7 +177,7 @@ bool Colliders::dampingLayers() const {
 bool Colliders::dampInLayers(const Vec3& x, Vec3& velocity, double dt) const {
   bool inside = false;
   for (const PlaneCollider& pl : planes) {
-    if (!(pl.damping > 0.0)) continue;
+    if (!(pl.damping > 0.0 && pl.layer > 0.0)) continue;
     const double height = dot(x - pl.point, pl.normal);
     if (height > pl.layer) continue;
     velocity -= pl.normal * (dot(velocity, pl.normal) * -std::expm1(-pl.damping * dt));

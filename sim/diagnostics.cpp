@@ -1,7 +1,9 @@
 #include "sim/diagnostics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include "sim/forces.h"
 #include "sim/hinge.h"
@@ -9,38 +11,113 @@
 
 namespace springy {
 
+namespace {
+
+// measureBody splits a body into regions of this many vertices (with the elements whose first
+// vertex lies in them), measures the regions on the world's threads and combines their sums in
+// region order: the same numbers on every thread count.
+constexpr uint32_t kRegionVertices = 512;
+
+struct RegionSums {
+  double mass = 0.0, speedSquared = 0.0, kinetic = 0.0, gravitational = 0.0, elastic = 0.0;
+  double maxStrain = 0.0, penetration = 0.0;
+  Vec3 centroid, momentum, angularMomentum, lo, hi;
+  bool finite = true;
+};
+
+// The first index in [lo, hi) whose key is at least `bound`, for keys ascending over [lo, hi)
+// (addBody sorts a body's elements by their first vertex). Starting each search at the last
+// boundary keeps the regions a partition of the elements even if they were not sorted.
+template <class Key>
+uint32_t firstAtLeast(uint32_t lo, uint32_t hi, uint32_t bound, Key key) {
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (key(mid) < bound) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+}  // namespace
+
 BodyMeasures measureBody(const World& world, uint32_t body) {
   const Model& model = world.model();
   const BodyInfo& info = model.bodies[body];
-  const std::vector<Vec3>& x = world.positions();
-  const std::vector<Vec3>& v = world.velocities();
+  const Vec3* x = world.positions().data();
+  const Vec3* v = world.velocities().data();
+  const uint32_t regions = std::max(1u, (info.vertexCount + kRegionVertices - 1) / kRegionVertices);
+  // Element boundaries of the regions: struts by their first end (i < j), hinges by the lower
+  // vertex of their edge, faces by their lowest vertex.
+  std::vector<uint32_t> strutAt(regions + 1), hingeAt(regions + 1);
+  strutAt[0] = info.firstStrut, strutAt[regions] = info.firstStrut + info.strutCount;
+  hingeAt[0] = info.firstHinge, hingeAt[regions] = info.firstHinge + info.hingeCount;
+  for (uint32_t r = 1; r < regions; ++r) {
+    const uint32_t bound = info.firstVertex + r * kRegionVertices;
+    strutAt[r] = firstAtLeast(strutAt[r - 1], strutAt[regions], bound,
+                              [&](uint32_t s) { return model.struts[s].i; });
+    hingeAt[r] = firstAtLeast(hingeAt[r - 1], hingeAt[regions], bound, [&](uint32_t h) {
+      return std::min(model.hinges[h].v[0], model.hinges[h].v[1]);
+    });
+  }
+  // The volume in enclosedVolume's chunks, so that it is that function's number exactly; the
+  // regions take the chunks in proportion.
+  const uint32_t chunks = (info.faceCount + kVolumeChunk - 1) / kVolumeChunk;
+  std::vector<double> chunkSum(chunks);
+  std::vector<RegionSums> sums(regions);
+  world.parallelFor(regions, [&](std::size_t first, std::size_t last) {
+    for (std::size_t r = first; r < last; ++r) {
+      RegionSums& m = sums[r];
+      const uint32_t begin = info.firstVertex + static_cast<uint32_t>(r) * kRegionVertices;
+      const uint32_t end = std::min(begin + kRegionVertices, info.firstVertex + info.vertexCount);
+      m.lo = m.hi = x[begin];
+      for (uint32_t i = begin; i < end; ++i) {
+        const double mi = model.mass[i];
+        m.finite = m.finite && isFinite(x[i]) && isFinite(v[i]);
+        m.mass += mi;
+        m.centroid += x[i] * mi;
+        m.momentum += v[i] * mi;
+        m.angularMomentum += cross(x[i], v[i]) * mi;
+        m.kinetic += 0.5 * mi * lengthSquared(v[i]);
+        m.gravitational -= mi * dot(model.gravity, x[i]);
+        m.speedSquared += lengthSquared(v[i]);
+        m.lo = componentMin(m.lo, x[i]);
+        m.hi = componentMax(m.hi, x[i]);
+        m.penetration = std::max(m.penetration, model.colliders.planePenetration(x[i]));
+      }
+      const StrutMeasures struts = measureStruts(model.struts.data(), strutAt[r], strutAt[r + 1], x);
+      m.elastic = struts.energy + hingeEnergy(model.hinges.data(), hingeAt[r], hingeAt[r + 1], x);
+      m.maxStrain = struts.maxStrain;
+      for (std::size_t c = r * chunks / regions; c < (r + 1) * chunks / regions; ++c) {
+        const uint32_t f = info.firstFace + static_cast<uint32_t>(c) * kVolumeChunk;
+        chunkSum[c] = sixVolume(model, f, std::min(f + kVolumeChunk, info.firstFace + info.faceCount),
+                                x[info.firstVertex], x);
+      }
+    }
+  });
   BodyMeasures m;
   double totalMass = 0.0, speedSquared = 0.0;
-  Bounds b = {x[info.firstVertex], x[info.firstVertex]};
-  for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
-    const double mi = model.mass[i];
-    m.finite = m.finite && isFinite(x[i]) && isFinite(v[i]);
-    totalMass += mi;
-    m.centroid += x[i] * mi;
-    m.momentum += v[i] * mi;
-    m.angularMomentum += cross(x[i], v[i]) * mi;
-    m.kinetic += 0.5 * mi * lengthSquared(v[i]);
-    m.gravitational -= mi * dot(model.gravity, x[i]);
-    speedSquared += lengthSquared(v[i]);
-    b.lo = componentMin(b.lo, x[i]);
-    b.hi = componentMax(b.hi, x[i]);
-    m.penetration = std::fmax(m.penetration, model.colliders.planePenetration(x[i]));
+  Bounds b = {sums[0].lo, sums[0].hi};
+  for (const RegionSums& r : sums) {
+    m.finite = m.finite && r.finite;
+    totalMass += r.mass;
+    m.centroid += r.centroid;
+    m.momentum += r.momentum;
+    m.angularMomentum += r.angularMomentum;
+    m.kinetic += r.kinetic;
+    m.gravitational += r.gravitational;
+    m.elastic += r.elastic;
+    speedSquared += r.speedSquared;
+    b.lo = componentMin(b.lo, r.lo);
+    b.hi = componentMax(b.hi, r.hi);
+    m.penetration = std::max(m.penetration, r.penetration);
+    m.maxStrain = std::max(m.maxStrain, r.maxStrain);
   }
   m.centroid = m.centroid / totalMass;
   m.rmsSpeed = std::sqrt(speedSquared / info.vertexCount);
   m.size = length(b.size());
-  m.elastic = strutEnergy(model.struts.data(), info.firstStrut, info.firstStrut + info.strutCount, x.data()) +
-              hingeEnergy(model.hinges.data(), info.firstHinge, info.firstHinge + info.hingeCount, x.data());
-  for (uint32_t s = info.firstStrut; s < info.firstStrut + info.strutCount; ++s) {
-    const Strut& st = model.struts[s];
-    m.maxStrain = std::fmax(m.maxStrain, std::fabs(length(x[st.j] - x[st.i]) - st.restLength) / st.restLength);
-  }
-  m.volume = enclosedVolume(model, body, x.data());
+  double six = 0.0;
+  for (double c : chunkSum) six += c;
+  m.volume = six / 6.0;
   m.elastic += gasEnergy(info, m.volume);
   return m;
 }

@@ -1,5 +1,6 @@
 #include "sim/strut.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace springy {
@@ -41,14 +42,15 @@ void applyStrutsOwned(const Strut* struts, const ElementRef* list, std::size_t c
   }
 }
 
-double strutEnergy(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x) {
-  double e = 0.0;
+StrutMeasures measureStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x) {
+  StrutMeasures m;
   for (std::size_t s = begin; s < end; ++s) {
     const Strut& st = struts[s];
     const double stretch = length(x[st.j] - x[st.i]) - st.restLength;
-    e += 0.5 * st.stiffness * stretch * stretch;
+    m.energy += 0.5 * st.stiffness * stretch * stretch;
+    m.maxStrain = std::max(m.maxStrain, std::fabs(stretch) / st.restLength);
   }
-  return e;
+  return m;
 }
 
 }  // namespace springy

@@ -20,7 +20,12 @@ void applyStruts(const Strut* struts, std::size_t begin, std::size_t end, const 
 void applyStrutsOwned(const Strut* struts, const ElementRef* list, std::size_t count, const Vec3* x, const Vec3* v,
                  Vec3* f);
 
-// Elastic energy 1/2 k (l - l0)^2 summed over struts [begin, end).
-double strutEnergy(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x);
+// Elastic energy 1/2 k (l - l0)^2 summed over struts [begin, end), and the largest strain
+// |l - l0| / l0 among them.
+struct StrutMeasures {
+  double energy = 0.0;
+  double maxStrain = 0.0;
+};
+StrutMeasures measureStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x);
 
 }  // namespace springy

@@ -41,11 +41,13 @@ constexpr double lengthSquared(const Vec3& a) { return dot(a, a); }
 inline double length(const Vec3& a) { return std::sqrt(dot(a, a)); }
 inline Vec3 normalized(const Vec3& a) { return a / length(a); }
 inline bool isFinite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
+// Per component; a NaN in b leaves a's component (as std::fmin), one in a stays. Written out
+// because std::fmin/fmax are library calls at -O2 (their NaN rules keep GCC from inlining them).
 inline Vec3 componentMin(const Vec3& a, const Vec3& b) {
-  return {std::fmin(a.x, b.x), std::fmin(a.y, b.y), std::fmin(a.z, b.z)};
+  return {b.x < a.x ? b.x : a.x, b.y < a.y ? b.y : a.y, b.z < a.z ? b.z : a.z};
 }
 inline Vec3 componentMax(const Vec3& a, const Vec3& b) {
-  return {std::fmax(a.x, b.x), std::fmax(a.y, b.y), std::fmax(a.z, b.z)};
+  return {a.x < b.x ? b.x : a.x, a.y < b.y ? b.y : a.y, a.z < b.z ? b.z : a.z};
 }
 
 constexpr double kPi = 3.14159265358979323846;

@@ -141,7 +141,34 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
     distribute([&](std::size_t e, int c) { return model_.faces[e][static_cast<std::size_t>(c)]; }, model_.faces.size(),
                3, &Share::faces);
   }
+  // The other threads' vertices each thread reads (its elements' corners it does not own).
+  for (Share& share : shares_) {
+    std::vector<uint32_t> foreign;
+    const auto add = [&](uint32_t i) {
+      if (i < share.begin || i >= share.end) foreign.push_back(i);
+    };
+    for (const ElementRef& r : share.struts) add(model_.struts[r.index].i), add(model_.struts[r.index].j);
+    for (const ElementRef& r : share.hinges) {
+      for (uint32_t i : model_.hinges[r.index].v) add(i);
+    }
+    for (const ElementRef& r : share.faces) {
+      for (uint32_t i : model_.faces[r.index]) add(i);
+    }
+    std::sort(foreign.begin(), foreign.end());
+    foreign.erase(std::unique(foreign.begin(), foreign.end()), foreign.end());
+    share.foreign = std::move(foreign);
+  }
   pool_ = std::make_unique<ThreadPool>(threads);
+}
+
+void World::prefetchForeign(unsigned thread, const Vec3* x, const Vec3* v) const {
+  // Reading a vertex another core has just written costs a cache-line transfer between the
+  // cores (0.06-0.24 us one way on the 2-core VM of docs/benchmarks.md). Met one by one inside
+  // the force loops these transfers would add up; requested together up front they overlap.
+  for (uint32_t i : shares_[thread].foreign) {
+    __builtin_prefetch(&x[i]);
+    if (v != nullptr) __builtin_prefetch(&v[i]);
+  }
 }
 
 double World::redundancy() const {
@@ -153,8 +180,7 @@ double World::redundancy() const {
 
 template <class F>
 void World::forVertices(F&& fn) const {
-  if (pool_) pool_->forRange(model_.vertexCount(), fn);
-  else fn(std::size_t{0}, model_.vertexCount());
+  parallelFor(model_.vertexCount(), fn);
 }
 
 World::~World() = default;
@@ -178,8 +204,15 @@ void World::updateGas(const Vec3* x) const {
       chunkSum_[c] = sixVolume(model_, chunk.begin, chunk.end, x[model_.bodies[chunk.body].firstVertex], x);
     }
   };
-  if (pool_ && volumeChunks_.size() > 1) pool_->forRange(volumeChunks_.size(), sumChunks);
-  else sumChunks(0, volumeChunks_.size());
+  if (pool_ && volumeChunks_.size() > 1) {
+    pool_->run([&](unsigned thread) {
+      prefetchForeign(thread, x, nullptr);
+      const std::size_t chunks = volumeChunks_.size(), threads = pool_->size();
+      sumChunks(chunks * thread / threads, chunks * (thread + 1) / threads);
+    });
+  } else {
+    sumChunks(0, volumeChunks_.size());
+  }
   std::size_t c = 0;
   for (uint32_t b : gasBodies_) {
     double sum = 0.0;
@@ -216,6 +249,7 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
   // The same stages in the same order as the one-threaded loop, restricted to this thread's
   // vertices: each vertex receives the same terms in the same order.
   const Share& share = shares_[thread];
+  prefetchForeign(thread, x, v);
   std::fill(f + share.begin, f + share.end, Vec3{});
   for (ForceStage stage : forceStages_) {
     switch (stage) {
@@ -251,8 +285,14 @@ void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const
 
 void World::step() {
   const double dt = dt_, t = time_;
-  if (!model_.colliders.empty()) xOld_ = x_;
   Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data();
+  if (!model_.colliders.empty()) {
+    // Each thread copies the vertices it owns: a line written on one core and read on another
+    // costs a transfer between the cores' caches (0.06-0.24 us one way on the 2-core VM of
+    // docs/benchmarks.md).
+    Vec3* xOld = xOld_.data();
+    forVertices([&](std::size_t begin, std::size_t end) { std::copy(x + begin, x + end, xOld + begin); });
+  }
 
   switch (integrator_) {
     case Integrator::ExplicitEuler:

@@ -71,6 +71,15 @@ class World {
   // 1 with one thread, slightly above with more (elements on a boundary between threads).
   double redundancy() const;
 
+  // Runs fn(begin, end) over [0, n) split into contiguous ranges among the world's threads,
+  // the calling thread included (fork-join); for passes outside the step, such as the
+  // measurements. fn must not throw.
+  template <class F>
+  void parallelFor(std::size_t n, F&& fn) const {
+    if (pool_) pool_->forRange(n, fn);
+    else fn(std::size_t{0}, n);
+  }
+
   // Total force on every vertex for a given state and time, running the stage list.
   void computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const;
 
@@ -104,10 +113,16 @@ class World {
   // count), then its overpressure.
   void updateGas(const Vec3* x) const;
 
-  // A thread's share: the vertices it owns, [begin, end), and the elements that touch them.
+  // Asks for the positions (and velocities, if v is not null) of the vertices thread `thread`
+  // reads but does not own, ahead of the loops that read them.
+  void prefetchForeign(unsigned thread, const Vec3* x, const Vec3* v) const;
+
+  // A thread's share: the vertices it owns, [begin, end), the elements that touch them, and
+  // the other vertices of those elements (sorted).
   struct Share {
     std::size_t begin = 0, end = 0;
     std::vector<ElementRef> struts, hinges, faces;
+    std::vector<uint32_t> foreign;
   };
 
   Model model_;

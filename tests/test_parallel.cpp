@@ -9,8 +9,11 @@
 
 #include "sim/diagnostics.h"
 #include "sim/error.h"
+#include "sim/forces.h"
+#include "sim/hinge.h"
 #include "sim/parallel.h"
 #include "sim/scene.h"
+#include "sim/strut.h"
 #include "sim/world.h"
 
 namespace springy {
@@ -92,6 +95,52 @@ TEST(ThreadSplit, ForcesEqualTheOneThreadedSumExactly) {
   one.computeForces(one.positions().data(), one.velocities().data(), one.time(), f1.data());
   two.computeForces(one.positions().data(), one.velocities().data(), one.time(), f2.data());
   for (std::size_t i = 0; i < f1.size(); ++i) ASSERT_EQ(f1[i], f2[i]) << "vertex " << i;
+}
+
+TEST(ThreadSplit, MeasurementsAreTheSameOnEveryThreadCountAndCoverTheWholeBody) {
+  // measureBody splits a body into regions of 512 vertices on the world's threads (the ball
+  // has two) and adds the regions' sums in order: the same bits on every thread count, and
+  // the same totals as plain loops over the whole body.
+  World one = makeWorld(Integrator::SymplecticEuler, 1);
+  for (int s = 0; s < 200; ++s) one.step();
+  const Model& model = one.model();
+  const Vec3* x = one.positions().data();
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    const BodyInfo& info = model.bodies[b];
+    const BodyMeasures m = measureBody(one, b);
+    EXPECT_EQ(m.volume, enclosedVolume(model, b, x)) << info.name;
+    const StrutMeasures struts = measureStruts(model.struts.data(), info.firstStrut, info.firstStrut + info.strutCount, x);
+    EXPECT_EQ(m.maxStrain, struts.maxStrain) << info.name;
+    const double elastic = struts.energy + hingeEnergy(model.hinges.data(), info.firstHinge,
+                                                       info.firstHinge + info.hingeCount, x) +
+                           gasEnergy(info, m.volume);
+    EXPECT_NEAR(m.elastic, elastic, 1e-12 * elastic) << info.name;
+    double kinetic = 0.0;
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      kinetic += 0.5 * model.mass[i] * lengthSquared(one.velocities()[i]);
+    }
+    EXPECT_NEAR(m.kinetic, kinetic, 1e-12 * kinetic) << info.name;
+    ASSERT_GT(kinetic, 0.0);
+  }
+  for (unsigned threads : {2u, 3u, 7u}) {
+    World world = makeWorld(Integrator::SymplecticEuler, threads);
+    for (int s = 0; s < 200; ++s) world.step();
+    ASSERT_EQ(stateHash(world), stateHash(one));
+    for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+      const BodyMeasures expected = measureBody(one, b), m = measureBody(world, b);
+      EXPECT_EQ(m.centroid, expected.centroid) << threads << " threads";
+      EXPECT_EQ(m.momentum, expected.momentum) << threads << " threads";
+      EXPECT_EQ(m.angularMomentum, expected.angularMomentum) << threads << " threads";
+      EXPECT_EQ(m.kinetic, expected.kinetic) << threads << " threads";
+      EXPECT_EQ(m.gravitational, expected.gravitational) << threads << " threads";
+      EXPECT_EQ(m.elastic, expected.elastic) << threads << " threads";
+      EXPECT_EQ(m.volume, expected.volume) << threads << " threads";
+      EXPECT_EQ(m.size, expected.size) << threads << " threads";
+      EXPECT_EQ(m.maxStrain, expected.maxStrain) << threads << " threads";
+      EXPECT_EQ(m.penetration, expected.penetration) << threads << " threads";
+      EXPECT_EQ(m.rmsSpeed, expected.rmsSpeed) << threads << " threads";
+    }
+  }
 }
 
 TEST(ThreadSplit, SpatialRangesKeepTheDuplicatedWorkSmall) {

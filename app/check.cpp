@@ -93,7 +93,7 @@ int runCheck(const CheckOptions& options) {
     for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
       const BodyRecord& r = monitor.records()[b];
       const BodyInfo& info = world.model().bodies[b];
-      std::printf("  %-16s %9llu %8.3f %8.2f %10.4f %10.2e %9.3f %10.3f %10.4g %10.4g %10.4g %s\n", info.name.c_str(),
+      std::printf("  %-16s %9llu %8.3f %8.3f %10.4f %10.2e %9.3f %10.3f %10.4g %10.4g %10.4g %s\n", info.name.c_str(),
                   static_cast<unsigned long long>(world.stepCount()), world.time(), wall, r.maxStrain,
                   r.maxPenetration, r.minVolumeRatio, r.last.volume / info.restVolume, r.last.kinetic,
                   r.last.gravitational, r.last.elastic, rest.atRest(info) ? "yes" : "no");

@@ -465,7 +465,7 @@ void World::step() {
   time_ = t + dt;
   ++steps_;
   if (!model_.colliders.empty()) collide();
-  if (pool_ && ++balanceSteps_ == kBalanceWindow) rebalance();
+  if (pool_ && loadBalance_ && ++balanceSteps_ == kBalanceWindow) rebalance();
 }
 
 void World::collide() {

@@ -75,6 +75,8 @@ class World {
   static constexpr uint32_t kBalanceWindow = 64;
   static constexpr double kImbalance = 0.05;
   std::vector<std::size_t> split() const;
+  // Turns the load balance off (the split then stays as set) or back on; on by default.
+  void setLoadBalance(bool on) { loadBalance_ = on; }
   // Sets the ranges (threads() + 1 ascending bounds from 0 to the vertex count), e.g. for a
   // test; throws Error otherwise.
   void setSplit(const std::vector<std::size_t>& bounds);
@@ -173,6 +175,7 @@ class World {
   };
   mutable std::vector<Busy> busy_;             // per thread, in the current balance window
   uint32_t balanceSteps_ = 0;                  // steps into the current balance window
+  bool loadBalance_ = true;
 };
 
 }  // namespace springy

@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+// strutPacket returns 32-byte vectors through inlined helpers local to this file; GCC's note
+// that such calls have another ABI with and without AVX concerns no caller.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 namespace springy {
 
 namespace {
@@ -19,27 +23,77 @@ inline bool strutForce(const Strut& st, const Vec3* x, const Vec3* v, Vec3& fi) 
   return true;
 }
 
-}  // namespace
+// Four struts at once, one per lane of a vector of four doubles (GCC's vector extension, as
+// the hinge packet in hinge.cpp): strutForce's operations in the same order, never fused
+// (-ffp-contract=off), so each strut's force is bit-identical to strutForce's. The gain is
+// the square root and the division, which the scalar kernel waits on one strut at a time.
+typedef double Lanes __attribute__((vector_size(32)));
 
-void applyStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f) {
-  Vec3 fi;
-  for (std::size_t s = begin; s < end; ++s) {
-    const Strut& st = struts[s];
-    if (!strutForce(st, x, v, fi)) continue;
-    f[st.i] += fi;
-    f[st.j] -= fi;
+inline void strutPacket(const Strut* const s[4], const Vec3* x, const Vec3* v, Vec3 fi[4], bool ok[4]) {
+  Lanes dx, dy, dz, wx, wy, wz, k, d, l0;
+  for (int l = 0; l < 4; ++l) {
+    const Strut& st = *s[l];
+    const Vec3 xij = x[st.j] - x[st.i], vij = v[st.j] - v[st.i];
+    dx[l] = xij.x, dy[l] = xij.y, dz[l] = xij.z;
+    wx[l] = vij.x, wy[l] = vij.y, wz[l] = vij.z;
+    k[l] = st.stiffness, d[l] = st.damping, l0[l] = st.restLength;
+  }
+  const Lanes ll = dx * dx + dy * dy + dz * dz;
+  Lanes len;
+  for (int l = 0; l < 4; ++l) len[l] = std::sqrt(ll[l]);  // one vsqrtpd with AVX
+  const Lanes inv = 1.0 / len;
+  const Lanes ux = dx * inv, uy = dy * inv, uz = dz * inv;
+  const Lanes scale = k * (len - l0) + d * (wx * ux + wy * uy + wz * uz);
+  const Lanes fx = ux * scale, fy = uy * scale, fz = uz * scale;
+  for (int l = 0; l < 4; ++l) {
+    ok[l] = len[l] > 0.0;
+    fi[l] = Vec3{fx[l], fy[l], fz[l]};
   }
 }
 
-void applyStrutsOwned(const Strut* struts, const ElementRef* list, std::size_t count, const Vec3* x, const Vec3* v,
-                 Vec3* f) {
-  Vec3 fi;
-  for (std::size_t r = 0; r < count; ++r) {
-    const Strut& st = struts[list[r].index];
-    if (!strutForce(st, x, v, fi)) continue;
-    if (list[r].mask & 1u) f[st.i] += fi;
-    if (list[r].mask & 2u) f[st.j] -= fi;
+// Adds the forces of count struts, the r-th being struts[indexOf(r)], to the ends whose bit is
+// set in maskOf(r) (bit 0: i, bit 1: j): four at a time, the rest one at a time, always summed
+// in list order.
+template <class IndexOf, class MaskOf>
+inline void applyStrutList(const Strut* struts, std::size_t count, IndexOf indexOf, MaskOf maskOf, const Vec3* x,
+                           const Vec3* v, Vec3* f) {
+  const auto add = [&](std::size_t r, const Vec3& fi) {
+    const Strut& st = struts[indexOf(r)];
+    const uint32_t mask = maskOf(r);
+    if (mask & 1u) f[st.i] += fi;
+    if (mask & 2u) f[st.j] -= fi;
+  };
+  Vec3 fi[4];
+  bool ok[4];
+  std::size_t r = 0;
+  for (; r + 4 <= count; r += 4) {
+    const Strut* s[4] = {&struts[indexOf(r)], &struts[indexOf(r + 1)], &struts[indexOf(r + 2)],
+                         &struts[indexOf(r + 3)]};
+    strutPacket(s, x, v, fi, ok);
+    for (std::size_t l = 0; l < 4; ++l) {
+      if (ok[l]) add(r + l, fi[l]);
+    }
   }
+  for (; r < count; ++r) {
+    if (strutForce(struts[indexOf(r)], x, v, fi[0])) add(r, fi[0]);
+  }
+}
+
+}  // namespace
+
+__attribute__((target_clones("avx2", "default"))) void applyStruts(const Strut* struts, std::size_t begin,
+                                                                   std::size_t end, const Vec3* x, const Vec3* v,
+                                                                   Vec3* f) {
+  applyStrutList(
+      struts, end - begin, [begin](std::size_t r) { return begin + r; }, [](std::size_t) { return 3u; }, x, v, f);
+}
+
+__attribute__((target_clones("avx2", "default"))) void applyStrutsOwned(const Strut* struts, const ElementRef* list,
+                                                                        std::size_t count, const Vec3* x,
+                                                                        const Vec3* v, Vec3* f) {
+  applyStrutList(
+      struts, count, [list](std::size_t r) { return list[r].index; }, [list](std::size_t r) { return list[r].mask; },
+      x, v, f);
 }
 
 StrutMeasures measureStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x) {

@@ -92,26 +92,18 @@ void nsPer(benchmark::State& state, const char* name, double count) {
 
 // --- force kernels, one core, per element
 
-// The struts of a ball, all in one call (four-lane packets) or one strut per call (the
-// one-strut kernel): the packets' gain, measured in the same run.
-void strutKernel(benchmark::State& state, bool oneAtATime) {
+void BM_StrutKernel(benchmark::State& state) {
   const Model model = ballModel(static_cast<int>(state.range(0)), false);
   std::vector<Vec3> x, v, f(model.vertexCount());
   perturbedState(model, x, v);
-  const std::size_t n = model.struts.size(), chunk = oneAtATime ? 1 : n;
   for (auto _ : state) {
-    for (std::size_t k = 0; k < n; k += chunk) {
-      applyStruts(model.struts.data(), k, k + chunk, x.data(), v.data(), f.data());
-    }
+    applyStruts(model.struts.data(), 0, model.struts.size(), x.data(), v.data(), f.data());
     benchmark::DoNotOptimize(f.data());
     benchmark::ClobberMemory();
   }
-  nsPer(state, "ns_per_strut", static_cast<double>(n));
+  nsPer(state, "ns_per_strut", static_cast<double>(model.struts.size()));
 }
-void BM_StrutKernel(benchmark::State& state) { strutKernel(state, false); }
-void BM_StrutKernelOneAtATime(benchmark::State& state) { strutKernel(state, true); }
 BENCHMARK(BM_StrutKernel)->DenseRange(2, 6)->UseRealTime();
-BENCHMARK(BM_StrutKernelOneAtATime)->DenseRange(2, 6)->UseRealTime();
 
 // The hinges of a ball, all in one call (four-lane packets) or one hinge per call (the
 // one-hinge kernel): the packets' gain, measured in the same run.

@@ -127,6 +127,7 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
   pool_ = std::make_unique<ThreadPool>(threads);
   busy_.assign(threads, Busy{});
   balanceSteps_ = 0;
+  warmingUp_ = true;
 }
 
 std::vector<std::size_t> World::split() const {
@@ -210,12 +211,18 @@ void World::rebalance() {
   std::vector<double> busy(busy_.size());
   for (std::size_t t = 0; t < busy_.size(); ++t) busy[t] = busy_[t].seconds, busy_[t].seconds = 0.0;
   balanceSteps_ = 0;
+  // The first window after a new split runs on cold work lists and caches (and, after
+  // setThreads, first touches of memory): it measures the start-up, not the threads' rates.
+  if (warmingUp_) {
+    warmingUp_ = false;
+    return;
+  }
   // Rebuilding the work lists is a pass over every element: only for a clear imbalance.
   const double slowest = *std::max_element(busy.begin(), busy.end());
   const double mean = std::accumulate(busy.begin(), busy.end(), 0.0) / static_cast<double>(busy.size());
   if (!(slowest > (1.0 + kImbalance) * mean)) return;
   const std::vector<std::size_t> next = balancedSplit(split(), busy);
-  if (next != split()) setSplit(next);
+  if (next != split()) setSplit(next), warmingUp_ = true;
 }
 
 template <class F>

@@ -176,6 +176,7 @@ class World {
   mutable std::vector<Busy> busy_;             // per thread, in the current balance window
   uint32_t balanceSteps_ = 0;                  // steps into the current balance window
   bool loadBalance_ = true;
+  bool warmingUp_ = true;                      // the current window follows a new split
 };
 
 }  // namespace springy

@@ -175,22 +175,9 @@ void BM_StepThreads(benchmark::State& state) {
 }
 BENCHMARK(BM_StepThreads)->ArgsProduct({{2, 3, 4, 5, 6, 7}, {1, 2}})->UseRealTime();
 
-// The same on 2 threads with the load balance off (the even split kept): against
-// BM_StepThreads/level/2 in the same run, what the balance gains when the cores differ.
-void BM_StepThreadsEvenSplit(benchmark::State& state) {
-  const Model model = ballModel(static_cast<int>(state.range(0)));
-  World world(model, Integrator::RK4, 2e-4);
-  world.setThreads(2, 0);
-  world.setLoadBalance(false);
-  for (auto _ : state) world.step();
-  nsPer(state, "ns_per_vertex", static_cast<double>(model.vertexCount()));
-}
-BENCHMARK(BM_StepThreadsEvenSplit)->Arg(4)->Arg(5)->UseRealTime();
-
 // The time-to-solution ball of docs/bench-bullet.md (bench/drop_2562_gas.toml): 2562
 // vertices, struts P 15 ms, gas P_V 10 ms, no hinges, symplectic Euler at dt 1.5 ms, dropped
 // onto a plane; a cheap step, where fork-joins and traffic between the cores weigh most.
-// Args: threads, load balance (0 off, 1 on).
 void BM_GasBallStep(benchmark::State& state) {
   Model model;
   BodyDesc desc;
@@ -206,11 +193,10 @@ void BM_GasBallStep(benchmark::State& state) {
   model.colliders.planes.push_back(PlaneCollider{{0, 0, 0}, {0, 1, 0}, 0.6, 0.3});
   World world(model, Integrator::SymplecticEuler, 0.0015);
   world.setThreads(static_cast<unsigned>(state.range(0)), 0);
-  world.setLoadBalance(state.range(1) != 0);
   for (auto _ : state) world.step();
   nsPer(state, "ns_per_vertex", static_cast<double>(model.vertexCount()));
 }
-BENCHMARK(BM_GasBallStep)->Args({1, 0})->Args({2, 0})->Args({2, 1})->UseRealTime();
+BENCHMARK(BM_GasBallStep)->Arg(1)->Arg(2)->UseRealTime();
 
 // The machine: one cache-line round trip between two threads (each waits for the other's
 // write). What a fork-join and every vertex one core writes and the other reads cost; on a

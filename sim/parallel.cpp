@@ -1,8 +1,6 @@
 #include "sim/parallel.h"
 
-#include <algorithm>
 #include <charconv>
-#include <cmath>
 #include <cstdlib>
 #include <string>
 #include <string_view>
@@ -69,38 +67,6 @@ void ThreadPool::worker(unsigned index) {
     job_(ctx_, index);
     if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) pending_.notify_one();
   }
-}
-
-std::vector<std::size_t> balancedSplit(const std::vector<std::size_t>& bounds, const std::vector<double>& busy) {
-  const std::size_t threads = busy.size();
-  if (threads < 2 || bounds.size() != threads + 1) return bounds;
-  const double n = static_cast<double>(bounds.back() - bounds.front());
-  std::vector<double> rate(threads);
-  double totalRate = 0.0;
-  for (std::size_t t = 0; t < threads; ++t) {
-    if (!(busy[t] > 0.0)) return bounds;  // nothing measured
-    rate[t] = static_cast<double>(bounds[t + 1] - bounds[t]) / busy[t];
-    totalRate += rate[t];
-  }
-  std::vector<double> size(threads);
-  double total = 0.0;
-  for (std::size_t t = 0; t < threads; ++t) {
-    const double current = static_cast<double>(bounds[t + 1] - bounds[t]);
-    const double target = n * rate[t] / totalRate;
-    size[t] = std::max(0.5 * (current + target), 0.25 * n / static_cast<double>(threads));
-    total += size[t];
-  }
-  std::vector<std::size_t> next(threads + 1, bounds.front());
-  double cumulative = 0.0;
-  for (std::size_t t = 0; t < threads; ++t) {
-    cumulative += size[t];
-    next[t + 1] = bounds.front() + static_cast<std::size_t>(std::llround(n * cumulative / total));
-  }
-  next[threads] = bounds.back();
-  for (std::size_t t = 0; t < threads; ++t) {
-    if (next[t + 1] <= next[t]) return bounds;  // too few vertices to split this finely
-  }
-  return next;
 }
 
 unsigned defaultThreadCount() {

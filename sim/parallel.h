@@ -76,13 +76,6 @@ class ThreadPool {
   std::atomic<bool> stop_{false};
 };
 
-// Load balance: the split of [0, n) to use next, given the current one (bounds[0] = 0 <
-// bounds[1] < ... < bounds[k] = n, range t = [bounds[t], bounds[t + 1])) and the time each
-// range took (busy[t] > 0). Each thread's rate (vertices per second) is taken as measured, and
-// each range moves halfway towards the size that rate would finish in the common time (halfway:
-// one noisy window cannot swing the split); no range falls below a quarter of an even share.
-std::vector<std::size_t> balancedSplit(const std::vector<std::size_t>& bounds, const std::vector<double>& busy);
-
 // Threads to use when the user gives none: SPRINGY_THREADS if set, else the hardware's count.
 unsigned defaultThreadCount();
 

@@ -3,12 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cassert>
-#include <chrono>
 #include <cmath>
-#include <numeric>
-#include <string>
 
-#include "sim/error.h"
 #include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/implicit.h"
@@ -119,42 +115,16 @@ void World::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
   pool_.reset();
   shares_.clear();
   if (threads <= 1) return;
-  // Owners: contiguous index ranges, even to start with; step() moves them to where the
-  // threads' measured times balance (rebalance).
-  std::vector<std::size_t> bounds(threads + 1);
-  for (unsigned t = 0; t <= threads; ++t) bounds[t] = n * t / threads;
-  setSplit(bounds);
-  pool_ = std::make_unique<ThreadPool>(threads);
-  busy_.assign(threads, Busy{});
-  balanceSteps_ = 0;
-  warmingUp_ = true;
-}
 
-std::vector<std::size_t> World::split() const {
-  if (shares_.empty()) return {0, model_.vertexCount()};
-  std::vector<std::size_t> bounds;
-  for (const Share& share : shares_) bounds.push_back(share.begin);
-  bounds.push_back(shares_.back().end);
-  return bounds;
-}
-
-void World::setSplit(const std::vector<std::size_t>& bounds) {
-  const std::size_t n = model_.vertexCount();
-  const std::size_t threads = pool_ ? pool_->size() : bounds.size() - 1;
-  bool valid = bounds.size() == threads + 1 && threads >= 1 && bounds.front() == 0 && bounds.back() == n;
-  for (std::size_t t = 0; valid && t < threads; ++t) valid = bounds[t] < bounds[t + 1];
-  if (!valid) {
-    throw Error("World::setSplit: expected " + std::to_string(threads + 1) + " ascending bounds from 0 to " +
-                std::to_string(n) + " (every thread owns at least one vertex)");
-  }
-  // addBody numbers each body's vertices in spatial order, so a range is a compact piece of a
-  // body: few elements straddle two owners, and each thread writes its own stretch of memory.
-  shares_.assign(threads, Share{});
-  for (std::size_t t = 0; t < threads; ++t) shares_[t].begin = bounds[t], shares_[t].end = bounds[t + 1];
+  // Owners: contiguous index ranges, the ones forVertices hands out. addBody numbers each
+  // body's vertices in spatial order, so a range is a compact piece of a body: few elements
+  // straddle two owners, and each thread writes its own stretch of memory.
+  shares_.resize(threads);
+  for (unsigned t = 0; t < threads; ++t) shares_[t].begin = n * t / threads, shares_[t].end = n * (t + 1) / threads;
   // Each thread lists, in index order, the elements with at least one vertex it owns.
   const auto distribute = [&](auto&& vertexOf, std::size_t count, int corners, auto member) {
     for (std::size_t e = 0; e < count; ++e) {
-      for (std::size_t t = 0; t < threads; ++t) {
+      for (unsigned t = 0; t < threads; ++t) {
         uint32_t mask = 0;
         for (int c = 0; c < corners; ++c) {
           const std::size_t i = vertexOf(e, c);
@@ -171,18 +141,6 @@ void World::setSplit(const std::vector<std::size_t>& bounds) {
     distribute([&](std::size_t e, int c) { return model_.faces[e][static_cast<std::size_t>(c)]; }, model_.faces.size(),
                3, &Share::faces);
   }
-  // The volume chunks by the owner of their first face's lowest vertex (faces are listed by
-  // it, so the chunks' keys ascend): each thread sums the chunks of its own piece.
-  std::size_t c = 0;
-  for (std::size_t t = 0; t < threads; ++t) {
-    shares_[t].firstChunk = c;
-    while (c < volumeChunks_.size()) {
-      const Triangle& face = model_.faces[volumeChunks_[c].begin];
-      if (t + 1 < threads && std::min({face[0], face[1], face[2]}) >= shares_[t].end) break;
-      ++c;
-    }
-    shares_[t].endChunk = c;
-  }
   // The other threads' vertices each thread reads (its elements' corners it does not own).
   for (Share& share : shares_) {
     std::vector<uint32_t> foreign;
@@ -196,40 +154,11 @@ void World::setSplit(const std::vector<std::size_t>& bounds) {
     for (const ElementRef& r : share.faces) {
       for (uint32_t i : model_.faces[r.index]) add(i);
     }
-    for (std::size_t k = share.firstChunk; k < share.endChunk; ++k) {
-      for (uint32_t f = volumeChunks_[k].begin; f < volumeChunks_[k].end; ++f) {
-        for (uint32_t i : model_.faces[f]) add(i);
-      }
-    }
     std::sort(foreign.begin(), foreign.end());
     foreign.erase(std::unique(foreign.begin(), foreign.end()), foreign.end());
     share.foreign = std::move(foreign);
   }
-}
-
-void World::rebalance() {
-  std::vector<double> busy(busy_.size());
-  for (std::size_t t = 0; t < busy_.size(); ++t) busy[t] = busy_[t].seconds, busy_[t].seconds = 0.0;
-  balanceSteps_ = 0;
-  // The first window after a new split runs on cold work lists and caches (and, after
-  // setThreads, first touches of memory): it measures the start-up, not the threads' rates.
-  if (warmingUp_) {
-    warmingUp_ = false;
-    return;
-  }
-  // Rebuilding the work lists is a pass over every element: only for a clear imbalance.
-  const double slowest = *std::max_element(busy.begin(), busy.end());
-  const double mean = std::accumulate(busy.begin(), busy.end(), 0.0) / static_cast<double>(busy.size());
-  if (!(slowest > (1.0 + kImbalance) * mean)) return;
-  const std::vector<std::size_t> next = balancedSplit(split(), busy);
-  if (next != split()) setSplit(next), warmingUp_ = true;
-}
-
-template <class F>
-void World::timed(unsigned thread, F&& fn) const {
-  const auto start = std::chrono::steady_clock::now();
-  fn();
-  busy_[thread].seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  pool_ = std::make_unique<ThreadPool>(threads);
 }
 
 void World::prefetchForeign(unsigned thread, const Vec3* x, const Vec3* v) const {
@@ -251,11 +180,7 @@ double World::redundancy() const {
 
 template <class F>
 void World::forVertices(F&& fn) const {
-  if (!pool_) {
-    fn(std::size_t{0}, model_.vertexCount());
-    return;
-  }
-  pool_->run([&](unsigned t) { timed(t, [&] { fn(shares_[t].begin, shares_[t].end); }); });
+  parallelFor(model_.vertexCount(), fn);
 }
 
 World::~World() = default;
@@ -281,10 +206,9 @@ void World::updateGas(const Vec3* x) const {
   };
   if (pool_ && volumeChunks_.size() > 1) {
     pool_->run([&](unsigned thread) {
-      timed(thread, [&] {
-        prefetchForeign(thread, x, nullptr);
-        sumChunks(shares_[thread].firstChunk, shares_[thread].endChunk);
-      });
+      prefetchForeign(thread, x, nullptr);
+      const std::size_t chunks = volumeChunks_.size(), threads = pool_->size();
+      sumChunks(chunks * thread / threads, chunks * (thread + 1) / threads);
     });
   } else {
     sumChunks(0, volumeChunks_.size());
@@ -301,7 +225,7 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
   const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
   updateGas(x);
   if (pool_) {
-    pool_->run([&](unsigned thread) { timed(thread, [&] { ownedForces(thread, x, v, air, f, false); }); });
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, false); });
     return;
   }
   const std::size_t n = model_.vertexCount();
@@ -350,7 +274,7 @@ void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const
   if (pool_) {
     const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
     updateGas(x);
-    pool_->run([&](unsigned thread) { timed(thread, [&] { ownedForces(thread, x, v, air, a, true); }); });
+    pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, a, true); });
     return;
   }
   Vec3* f = forceScratch_.data();
@@ -472,7 +396,6 @@ void World::step() {
   time_ = t + dt;
   ++steps_;
   if (!model_.colliders.empty()) collide();
-  if (pool_ && loadBalance_ && ++balanceSteps_ == kBalanceWindow) rebalance();
 }
 
 void World::collide() {

@@ -67,19 +67,6 @@ class World {
   static constexpr std::size_t kMinVerticesPerThread = 1000;
   void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread);
   unsigned threads() const { return pool_ ? pool_->size() : 1; }
-  // The vertex ranges the threads own: thread t owns [split()[t], split()[t + 1]). Even after
-  // setThreads; every kBalanceWindow steps the world compares the threads' measured times and,
-  // if the slowest took over kImbalance more than the mean, moves the bounds to balance them
-  // (balancedSplit): cores that run at different speeds (a busy or distant core on a shared
-  // machine) get different amounts of work. Any split gives bit-identical results.
-  static constexpr uint32_t kBalanceWindow = 64;
-  static constexpr double kImbalance = 0.05;
-  std::vector<std::size_t> split() const;
-  // Turns the load balance off (the split then stays as set) or back on; on by default.
-  void setLoadBalance(bool on) { loadBalance_ = on; }
-  // Sets the ranges (threads() + 1 ascending bounds from 0 to the vertex count), e.g. for a
-  // test; throws Error otherwise.
-  void setSplit(const std::vector<std::size_t>& bounds);
   // Elements evaluated per force evaluation over all threads, divided by the element count:
   // 1 with one thread, slightly above with more (elements on a boundary between threads).
   double redundancy() const;
@@ -126,12 +113,6 @@ class World {
   // count), then its overpressure.
   void updateGas(const Vec3* x) const;
 
-  // Runs fn() and adds its wall time to the thread's busy time (the load balance's input).
-  template <class F>
-  void timed(unsigned thread, F&& fn) const;
-  // Ends a balance window: moves the split if the threads' busy times were uneven.
-  void rebalance();
-
   // Asks for the positions (and velocities, if v is not null) of the vertices thread `thread`
   // reads but does not own, ahead of the loops that read them.
   void prefetchForeign(unsigned thread, const Vec3* x, const Vec3* v) const;
@@ -142,7 +123,6 @@ class World {
     std::size_t begin = 0, end = 0;
     std::vector<ElementRef> struts, hinges, faces;
     std::vector<uint32_t> foreign;
-    std::size_t firstChunk = 0, endChunk = 0;  // the volume chunks it sums
   };
 
   Model model_;
@@ -170,13 +150,6 @@ class World {
   mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
-  struct alignas(64) Busy {                    // a cache line each: threads write their own
-    double seconds = 0.0;
-  };
-  mutable std::vector<Busy> busy_;             // per thread, in the current balance window
-  uint32_t balanceSteps_ = 0;                  // steps into the current balance window
-  bool loadBalance_ = true;
-  bool warmingUp_ = true;                      // the current window follows a new split
 };
 
 }  // namespace springy

@@ -151,69 +151,6 @@ TEST(ThreadSplit, SpatialRangesKeepTheDuplicatedWorkSmall) {
   EXPECT_LT(world.redundancy(), 1.1);
 }
 
-TEST(ThreadSplit, UnevenSplitsGiveBitIdenticalStates) {
-  // The load balance moves the bounds between the threads' vertex ranges at run time; any
-  // split must give the one-threaded result, including lopsided ones and three threads.
-  for (Integrator integrator : {Integrator::SymplecticEuler, Integrator::RK4}) {
-    World reference = makeWorld(integrator, 1);
-    for (int s = 0; s < 300; ++s) reference.step();
-    const std::size_t n = reference.model().vertexCount();
-    for (const std::vector<std::size_t>& bounds :
-         {std::vector<std::size_t>{0, n / 10, n}, std::vector<std::size_t>{0, n - 1, n},
-          std::vector<std::size_t>{0, 1, n / 2 + 7, n}}) {
-      World world = makeWorld(integrator, static_cast<unsigned>(bounds.size() - 1));
-      world.setSplit(bounds);
-      ASSERT_EQ(world.split(), bounds);
-      for (int s = 0; s < 300; ++s) {
-        // Move the split mid-run as well, as the balance does.
-        if (s == 150) {
-          world.setSplit(bounds.size() == 3 ? std::vector<std::size_t>{0, n / 2, n}
-                                            : std::vector<std::size_t>{0, n / 3, 2 * n / 3, n});
-        }
-        world.step();
-      }
-      EXPECT_EQ(stateHash(world), stateHash(reference)) << integratorName(integrator) << ", " << bounds.size() - 1 << " threads";
-    }
-  }
-}
-
-TEST(ThreadSplit, BadSplitIsAnError) {
-  World world = makeWorld(Integrator::SymplecticEuler, 2);
-  const std::size_t n = world.model().vertexCount();
-  for (const std::vector<std::size_t>& bounds :
-       {std::vector<std::size_t>{0, n}, std::vector<std::size_t>{0, 0, n}, std::vector<std::size_t>{0, 5, n + 1},
-        std::vector<std::size_t>{1, 5, n}, std::vector<std::size_t>{0, 5, 4, n}}) {
-    EXPECT_THROW(world.setSplit(bounds), Error);
-  }
-  EXPECT_EQ(world.split(), (std::vector<std::size_t>{0, n / 2, n}));  // unchanged
-}
-
-TEST(LoadBalance, EqualRatesKeepTheSplitAndUnequalOnesConvergeToTheirRatio) {
-  const std::vector<std::size_t> even = {0, 600, 1200};
-  EXPECT_EQ(balancedSplit(even, {0.3, 0.3}), even);
-  // Thread 1 works at half thread 0's rate (vertices per second): the split that finishes
-  // together gives thread 0 two thirds, 800 vertices. Each round moves halfway there.
-  const double rate[2] = {1000.0, 500.0};
-  std::vector<std::size_t> bounds = even;
-  for (int round = 0; round < 12; ++round) {
-    const std::vector<double> busy = {static_cast<double>(bounds[1] - bounds[0]) / rate[0],
-                                      static_cast<double>(bounds[2] - bounds[1]) / rate[1]};
-    const std::vector<std::size_t> next = balancedSplit(bounds, busy);
-    if (round == 0) {
-      EXPECT_EQ(next[1], 700u);  // halfway from 600 to 800
-    }
-    bounds = next;
-  }
-  EXPECT_NEAR(static_cast<double>(bounds[1]), 800.0, 1.0);
-  EXPECT_EQ(bounds.front(), 0u);
-  EXPECT_EQ(bounds.back(), 1200u);
-  // A thread that barely moves keeps a quarter of an even share (one bad window, e.g. the
-  // thread descheduled, cannot starve it); nothing measured leaves the split alone.
-  const std::vector<std::size_t> starved = balancedSplit({0, 100, 1200}, {1e-3, 1.0});
-  EXPECT_GE(starved[2] - starved[1], 150u);
-  EXPECT_EQ(balancedSplit(even, {0.0, 0.3}), even);
-}
-
 TEST(ThreadSplit, SmallModelsStayOnOneThread) {
   const SceneDesc scene = parseScene(kAllStages, "/virtual/all_stages.toml");
   World world(buildModel(scene), Integrator::RK4, 1e-3);

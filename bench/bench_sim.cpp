@@ -25,8 +25,7 @@ namespace {
 
 // A ball of the given icosphere level (162 vertices at level 2 ... 163842 at level 7), 1 m
 // across, 1 kg, with the drop test's stiffness, its lowest point 1.5 m above a ground plane.
-Model ballModel(int level, bool withPlane = true) {
-  Model model;
+BodyDesc ballDesc(int level) {
   BodyDesc desc;
   desc.name = "ball";
   desc.mesh = makeIcosphere(0.5, level);
@@ -36,7 +35,11 @@ Model ballModel(int level, bool withPlane = true) {
   desc.strutDecay = 0.1;
   desc.hingePeriod = 0.2;
   desc.hingeDecay = 0.5;
-  addBody(model, desc);
+  return desc;
+}
+Model ballModel(int level, bool withPlane = true) {
+  Model model;
+  addBody(model, ballDesc(level));
   if (withPlane) model.colliders.planes.push_back(PlaneCollider{{0, 0, 0}, {0, 1, 0}, 0.5, 0.3});
   return model;
 }
@@ -180,13 +183,8 @@ BENCHMARK(BM_StepThreads)->ArgsProduct({{2, 3, 4, 5, 6, 7}, {1, 2}})->UseRealTim
 // onto a plane; a cheap step, where fork-joins and traffic between the cores weigh most.
 void BM_GasBallStep(benchmark::State& state) {
   Model model;
-  BodyDesc desc;
-  desc.name = "ball";
-  desc.mesh = makeIcosphere(0.5, 4);
-  for (Vec3& p : desc.mesh.positions) p.y += 2.0;
-  desc.mass = 1.0;
+  BodyDesc desc = ballDesc(4);
   desc.strutPeriod = 0.015;
-  desc.strutDecay = 0.1;
   desc.hingePeriod = 0.0;
   desc.volumePeriod = 0.01;
   addBody(model, desc);

@@ -369,24 +369,38 @@ TEST(Model, VerticesAreRenumberedInSpatialOrderKeepingTheMesh) {
 namespace springy {
 namespace {
 
+// The packet kernels' test body: a level-3 icosphere, 1 m across, 1 kg, with desc's stiffness.
+Model packetBall(BodyDesc desc) {
+  desc.name = "ball";
+  desc.mesh = makeIcosphere(1.0, 3);
+  desc.mass = 1.0;
+  Model model;
+  addBody(model, desc);
+  return model;
+}
+
+// A deformed, moving state: rest positions moved by up to `amplitude` per axis, velocities up
+// to 1 m/s per axis, from rng.
+void shake(const Model& model, std::mt19937_64& rng, double amplitude, std::vector<Vec3>& x, std::vector<Vec3>& v) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  x = model.restPosition;
+  v.assign(x.size(), Vec3{});
+  for (Vec3& p : x) p += Vec3{u(rng), u(rng), u(rng)} * amplitude;
+  for (Vec3& w : v) w = Vec3{u(rng), u(rng), u(rng)};
+}
+
 TEST(Strut, FourStrutPacketsEqualTheOneAtATimeKernelExactly) {
   // applyStruts computes struts four at a time in vector lanes; the forces must be
   // bit-identical to the one-strut kernel's (a range of one strut), summed in the same order,
   // also through a thread's list with masks: on a deformed, moving icosphere with one strut
   // whose ends coincide (skipped, no force).
-  Model model;
   BodyDesc desc;
-  desc.name = "ball";
-  desc.mesh = makeIcosphere(1.0, 3);
-  desc.mass = 1.0;
   desc.strutPeriod = 0.05;
   desc.strutDecay = 0.2;
-  addBody(model, desc);
+  const Model model = packetBall(desc);
   std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<Vec3> x = model.restPosition, v(x.size());
-  for (Vec3& p : x) p += Vec3{u(rng), u(rng), u(rng)} * 0.05;
-  for (Vec3& w : v) w = Vec3{u(rng), u(rng), u(rng)};
+  std::vector<Vec3> x, v;
+  shake(model, rng, 0.05, x, v);
   const Strut& collapsed = model.struts[42];
   x[collapsed.j] = x[collapsed.i];
   std::vector<Vec3> packets(x.size()), single(x.size());
@@ -415,19 +429,14 @@ TEST(Hinge, FourHingePacketsEqualTheOneAtATimeKernelExactly) {
   // to the one-hinge kernel's (which a range of one hinge uses), summed in the same order: on a
   // bent, moving icosphere (hinges share vertices), with some faces crushed past the lever
   // guard, some hinges bent past the series branch, and one degenerate (skipped) hinge.
-  Model model;
   BodyDesc desc;
-  desc.name = "ball";
-  desc.mesh = makeIcosphere(1.0, 3);
-  desc.mass = 1.0;
   desc.hingePeriod = 0.3;
   desc.hingeDecay = 0.5;
-  addBody(model, desc);
+  const Model model = packetBall(desc);
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::vector<Vec3> x = model.restPosition, v(x.size());
-  for (Vec3& p : x) p += Vec3{u(rng), u(rng), u(rng)} * 0.08;  // bends hinges up to ~30 degrees
-  for (Vec3& w : v) w = Vec3{u(rng), u(rng), u(rng)};
+  std::vector<Vec3> x, v;
+  shake(model, rng, 0.08, x, v);  // bends hinges up to ~30 degrees
   for (std::size_t k = 0; k < model.hinges.size(); k += 37) {  // crush some faces
     const Hinge& h = model.hinges[k];
     x[h.v[2]] = x[h.v[0]] + (x[h.v[1]] - x[h.v[0]]) * 0.5 + Vec3{1e-3, 1e-3, 0.0} * u(rng);

@@ -47,7 +47,7 @@ BodyMeasures measureBody(const World& world, uint32_t body) {
   const Vec3* v = world.velocities().data();
   const uint32_t regions = std::max(1u, (info.vertexCount + kRegionVertices - 1) / kRegionVertices);
   // Element boundaries of the regions: struts by their first end (i < j), hinges by the lower
-  // vertex of their edge, faces by their lowest vertex.
+  // vertex of their edge.
   std::vector<uint32_t> strutAt(regions + 1), hingeAt(regions + 1);
   strutAt[0] = info.firstStrut, strutAt[regions] = info.firstStrut + info.strutCount;
   hingeAt[0] = info.firstHinge, hingeAt[regions] = info.firstHinge + info.hingeCount;
@@ -61,7 +61,7 @@ BodyMeasures measureBody(const World& world, uint32_t body) {
   }
   // The volume in enclosedVolume's chunks, so that it is that function's number exactly; the
   // regions take the chunks in proportion.
-  const uint32_t chunks = (info.faceCount + kVolumeChunk - 1) / kVolumeChunk;
+  const uint32_t chunks = volumeChunkCount(info);
   std::vector<double> chunkSum(chunks);
   std::vector<RegionSums> sums(regions);
   world.parallelFor(regions, [&](std::size_t first, std::size_t last) {
@@ -88,9 +88,7 @@ BodyMeasures measureBody(const World& world, uint32_t body) {
       m.elastic = struts.energy + hingeEnergy(model.hinges.data(), hingeAt[r], hingeAt[r + 1], x);
       m.maxStrain = struts.maxStrain;
       for (std::size_t c = r * chunks / regions; c < (r + 1) * chunks / regions; ++c) {
-        const uint32_t f = info.firstFace + static_cast<uint32_t>(c) * kVolumeChunk;
-        chunkSum[c] = sixVolume(model, f, std::min(f + kVolumeChunk, info.firstFace + info.faceCount),
-                                x[info.firstVertex], x);
+        chunkSum[c] = chunkSixVolume(model, body, static_cast<uint32_t>(c), x);
       }
     }
   });

@@ -63,13 +63,19 @@ double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o
   return sum;
 }
 
-double enclosedVolume(const Model& model, uint32_t body, const Vec3* x) {
+uint32_t volumeChunkCount(const BodyInfo& body) { return (body.faceCount + kVolumeChunk - 1) / kVolumeChunk; }
+
+double chunkSixVolume(const Model& model, uint32_t body, uint32_t chunk, const Vec3* x) {
   const BodyInfo& info = model.bodies[body];
-  const uint32_t end = info.firstFace + info.faceCount;
+  const uint32_t begin = info.firstFace + chunk * kVolumeChunk;
+  return sixVolume(model, begin, std::min(begin + kVolumeChunk, info.firstFace + info.faceCount),
+                   x[info.firstVertex], x);
+}
+
+double enclosedVolume(const Model& model, uint32_t body, const Vec3* x) {
+  const uint32_t chunks = volumeChunkCount(model.bodies[body]);
   double sum = 0.0;
-  for (uint32_t f = info.firstFace; f < end; f += kVolumeChunk) {
-    sum += sixVolume(model, f, std::min(f + kVolumeChunk, end), x[info.firstVertex], x);
-  }
+  for (uint32_t c = 0; c < chunks; ++c) sum += chunkSixVolume(model, body, c, x);
   return sum / 6.0;
 }
 

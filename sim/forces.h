@@ -41,6 +41,10 @@ double enclosedVolume(const Model& model, uint32_t body, const Vec3* x);
 constexpr uint32_t kVolumeChunk = 512;
 // Six times the volume of faces [begin, end) of a body about the point o (one chunk's sum).
 double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x);
+// The chunks of a body's faces, and six times the volume of chunk c: enclosedVolume is the
+// sum of the chunks in order, over six.
+uint32_t volumeChunkCount(const BodyInfo& body);
+double chunkSixVolume(const Model& model, uint32_t body, uint32_t chunk, const Vec3* x);
 // p0 (V0 / V - 1) [Pa]: +inf for V <= 0 (an inverted body).
 double gasOverpressure(const BodyInfo& body, double volume);
 // p0 V0 (V / V0 - 1 - ln(V / V0)) [J]: +inf for V <= 0.

@@ -54,13 +54,31 @@ void applyWindPressureOwned(const Model& model, const ElementRef* list, std::siz
   }
 }
 
-double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x) {
+namespace {
+
+// Six times the volume of faces [begin, end) about o; with kStore, also each face's N. The
+// indices and positions are read into locals first: storing N through a pointer GCC cannot
+// tell apart from x otherwise makes it keep them in memory, where the reloads stall.
+template <bool kStore>
+double sixVolumeOf(const Triangle* faces, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x,
+                   Vec3* areaVectors) {
   double sum = 0.0;
   for (uint32_t f = begin; f < end; ++f) {
-    const Triangle& t = model.faces[f];
-    sum += dot(x[t[0]] - o, cross(x[t[1]] - o, x[t[2]] - o));
+    const uint32_t i0 = faces[f][0], i1 = faces[f][1], i2 = faces[f][2];
+    const Vec3 x0 = x[i0], e1 = x[i1] - x0, e2 = x[i2] - x0;
+    const Vec3 n = cross(e1, e2);
+    sum += dot(x0 - o, n);
+    if constexpr (kStore) areaVectors[f] = n;
   }
   return sum;
+}
+
+}  // namespace
+
+double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x,
+                 Vec3* areaVectors) {
+  return areaVectors ? sixVolumeOf<true>(model.faces.data(), begin, end, o, x, areaVectors)
+                     : sixVolumeOf<false>(model.faces.data(), begin, end, o, x, nullptr);
 }
 
 uint32_t volumeChunkCount(const BodyInfo& body) { return (body.faceCount + kVolumeChunk - 1) / kVolumeChunk; }
@@ -91,33 +109,24 @@ double gasEnergy(const BodyInfo& body, double volume) {
   return body.gasPressure * body.restVolume * (d - std::log1p(d));
 }
 
-namespace {
-
-// The gas's force on each corner of face t: p (x1 - x0) x (x2 - x0) / 6.
-inline Vec3 gasForce(const Triangle& t, double p, const Vec3* x) {
-  return cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) * (p / 6.0);
-}
-
-}  // namespace
-
 void applyGasPressure(const Model& model, const double* overpressure, std::size_t begin, std::size_t end,
-                      const Vec3* x, Vec3* f) {
+                      const Vec3* areaVectors, Vec3* f) {
   for (std::size_t k = begin; k < end; ++k) {
     const Triangle& t = model.faces[k];
     const double p = overpressure[model.body[t[0]]];
     if (p == 0.0) continue;
-    const Vec3 force = gasForce(t, p, x);
+    const Vec3 force = areaVectors[k] * (p / 6.0);
     for (uint32_t i : t) f[i] += force;
   }
 }
 
 void applyGasPressureOwned(const Model& model, const double* overpressure, const ElementRef* list, std::size_t count,
-                           const Vec3* x, Vec3* f) {
+                           const Vec3* areaVectors, Vec3* f) {
   for (std::size_t r = 0; r < count; ++r) {
     const Triangle& t = model.faces[list[r].index];
     const double p = overpressure[model.body[t[0]]];
     if (p == 0.0) continue;
-    const Vec3 force = gasForce(t, p, x);
+    const Vec3 force = areaVectors[list[r].index] * (p / 6.0);
     for (int i = 0; i < 3; ++i) {
       if (list[r].mask & (1u << i)) f[t[i]] += force;
     }

@@ -29,7 +29,9 @@ void applyWindPressureOwned(const Model& model, const ElementRef* list, std::siz
 // the volume is the rest volume V0. Its pressure over the ambient, p = p0 (V0 / V - 1), pushes
 // every face outward; the volume is exact by the divergence theorem, V = 1/6 sum_f x0 . (x1 x x2)
 // over the outward faces, and the force on vertex i is p dV/dx_i, where each face adds
-// (x1 - x0) x (x2 - x0) / 6 (a third of its area vector) to each of its corners. That force is
+// N / 6 = (x1 - x0) x (x2 - x0) / 6 (a third of its area vector) to each of its corners. The
+// volume pass computes each face's N once: its term is x0 . N (the same triple product), and it
+// keeps N for the force pass at the same positions. That force is
 // -dE/dx of the gas's energy E = p0 V0 (V / V0 - 1 - ln(V / V0)) (the work the gas and the
 // ambient do on the body), whose second derivative at V0 is p0 / V0: the breathing stiffness.
 
@@ -39,8 +41,11 @@ void applyWindPressureOwned(const Model& model, const ElementRef* list, std::siz
 // and still produce the same number.
 double enclosedVolume(const Model& model, uint32_t body, const Vec3* x);
 constexpr uint32_t kVolumeChunk = 512;
-// Six times the volume of faces [begin, end) of a body about the point o (one chunk's sum).
-double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x);
+// Six times the volume of faces [begin, end) of a body about the point o (one chunk's sum),
+// sum (x0 - o) . N. With areaVectors, also stores each face's N = (x1 - x0) x (x2 - x0) at
+// areaVectors[face] for applyGasPressure.
+double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x,
+                 Vec3* areaVectors = nullptr);
 // The chunks of a body's faces, and six times the volume of chunk c: enclosedVolume is the
 // sum of the chunks in order, over six.
 uint32_t volumeChunkCount(const BodyInfo& body);
@@ -49,11 +54,13 @@ double chunkSixVolume(const Model& model, uint32_t body, uint32_t chunk, const V
 double gasOverpressure(const BodyInfo& body, double volume);
 // p0 V0 (V / V0 - 1 - ln(V / V0)) [J]: +inf for V <= 0.
 double gasEnergy(const BodyInfo& body, double volume);
-// Gas pressure on faces [begin, end); overpressure[b] is body b's (0 for bodies without gas).
+// Gas pressure on faces [begin, end); overpressure[b] is body b's (0 for bodies without gas),
+// areaVectors[face] the face's N from sixVolume at the same positions (read only for faces of
+// bodies with an overpressure).
 void applyGasPressure(const Model& model, const double* overpressure, std::size_t begin, std::size_t end,
-                      const Vec3* x, Vec3* f);
+                      const Vec3* areaVectors, Vec3* f);
 // The same for the listed faces, adding only to the corners whose bit is set in the mask.
 void applyGasPressureOwned(const Model& model, const double* overpressure, const ElementRef* list, std::size_t count,
-                           const Vec3* x, Vec3* f);
+                           const Vec3* areaVectors, Vec3* f);
 
 }  // namespace springy

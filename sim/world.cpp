@@ -83,6 +83,7 @@ World::World(Model model, Integrator integrator, double dt)
   if (!gasBodies_.empty()) {
     forceStages_.push_back(ForceStage::Gas);
     overpressure_.assign(model_.bodies.size(), 0.0);
+    areaVectors_.assign(model_.faces.size(), Vec3{});
   }
   for (TriangleCollider& tc : model_.colliders.meshes) {
     if (tc.nodes.empty()) tc.buildBvh();
@@ -201,7 +202,8 @@ void World::updateGas(const Vec3* x) const {
   const auto sumChunks = [&](std::size_t begin, std::size_t end) {
     for (std::size_t c = begin; c < end; ++c) {
       const VolumeChunk& chunk = volumeChunks_[c];
-      chunkSum_[c] = sixVolume(model_, chunk.begin, chunk.end, x[model_.bodies[chunk.body].firstVertex], x);
+      chunkSum_[c] = sixVolume(model_, chunk.begin, chunk.end, x[model_.bodies[chunk.body].firstVertex], x,
+                               areaVectors_.data());
     }
   };
   if (pool_ && volumeChunks_.size() > 1) {
@@ -239,7 +241,9 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
       case ForceStage::Hinges:
         applyHinges(model_.hinges.data(), hingeTerms_.data(), 0, model_.hinges.size(), x, v, f);
         break;
-      case ForceStage::Gas: applyGasPressure(model_, overpressure_.data(), 0, model_.faces.size(), x, f); break;
+      case ForceStage::Gas:
+        applyGasPressure(model_, overpressure_.data(), 0, model_.faces.size(), areaVectors_.data(), f);
+        break;
     }
   }
 }
@@ -261,7 +265,8 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
         applyHingesOwned(model_.hinges.data(), hingeTerms_.data(), share.hinges.data(), share.hinges.size(), x, v, f);
         break;
       case ForceStage::Gas:
-        applyGasPressureOwned(model_, overpressure_.data(), share.faces.data(), share.faces.size(), x, f);
+        applyGasPressureOwned(model_, overpressure_.data(), share.faces.data(), share.faces.size(),
+                              areaVectors_.data(), f);
         break;
     }
   }

@@ -149,6 +149,7 @@ class World {
   std::vector<VolumeChunk> volumeChunks_;      // in body and face order
   mutable std::vector<double> chunkSum_;       // per chunk: six times its volume
   mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
+  mutable std::vector<Vec3> areaVectors_;      // per face of a gas body: N of sixVolume, same evaluation
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
 };

@@ -63,8 +63,9 @@ TEST(Gas, ForceIsMinusTheGradientOfItsEnergy) {
   ASSERT_LT(volume, 0.95 * body.restVolume);  // compressed: the gas pushes out
   const double p = gasOverpressure(body, volume);
   ASSERT_GT(p, 0.0);
-  std::vector<Vec3> f(x.size());
-  applyGasPressure(model, &p, 0, model.faces.size(), x.data(), f.data());
+  std::vector<Vec3> f(x.size()), areaVectors(model.faces.size());
+  sixVolume(model, 0, static_cast<uint32_t>(model.faces.size()), x[0], x.data(), areaVectors.data());
+  applyGasPressure(model, &p, 0, model.faces.size(), areaVectors.data(), f.data());
   const double h = 1e-6;
   double worst = 0.0, scale = 0.0;
   for (std::size_t i = 0; i < x.size(); ++i) {

@@ -291,10 +291,11 @@ void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const
 void World::step() {
   const double dt = dt_, t = time_;
   Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data();
-  if (!model_.colliders.empty()) {
-    // Each thread copies the vertices it owns: a line written on one core and read on another
-    // costs a transfer between the cores' caches (0.06-0.24 us one way on the 2-core VM of
-    // docs/benchmarks.md).
+  // Contacts need the positions at the start of the step (xOld). The integrators that change
+  // x only in their last pass save it there; the others save it now.
+  const bool savedLate = integrator_ == Integrator::ExplicitEuler || integrator_ == Integrator::SymplecticEuler ||
+                         integrator_ == Integrator::RK4;
+  if (!model_.colliders.empty() && !savedLate) {
     Vec3* xOld = xOld_.data();
     forVertices([&](std::size_t begin, std::size_t end) { std::copy(x + begin, x + end, xOld + begin); });
   }
@@ -302,20 +303,16 @@ void World::step() {
   switch (integrator_) {
     case Integrator::ExplicitEuler:
       accelerations(x, v, t, a);
-      forVertices([&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-          x[i] += v[i] * dt;
-          v[i] += a[i] * dt;
-        }
+      lastPass(true, [&](std::size_t i) {
+        x[i] += v[i] * dt;
+        v[i] += a[i] * dt;
       });
       break;
     case Integrator::SymplecticEuler:
       accelerations(x, v, t, a);
-      forVertices([&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-          v[i] += a[i] * dt;
-          x[i] += v[i] * dt;
-        }
+      lastPass(true, [&](std::size_t i) {
+        v[i] += a[i] * dt;
+        x[i] += v[i] * dt;
       });
       break;
     case Integrator::VelocityVerlet: {
@@ -329,13 +326,11 @@ void World::step() {
         }
       });
       accelerations(x, vs, t + dt, aNext);
-      forVertices([&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-          v[i] += (a[i] + aNext[i]) * (0.5 * dt);
-          a[i] = aNext[i];
-        }
+      cachedAccelerationValid_ = true;  // unless a contact changes a velocity in the last pass
+      lastPass(false, [&](std::size_t i) {
+        v[i] += (a[i] + aNext[i]) * (0.5 * dt);
+        a[i] = aNext[i];
       });
-      cachedAccelerationValid_ = true;
       break;
     }
     case Integrator::Leapfrog: {
@@ -353,9 +348,7 @@ void World::step() {
         }
       });
       accelerations(x, vs, t + dt, a);
-      forVertices([&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) v[i] += a[i] * (0.5 * dt);  // kick
-      });
+      lastPass(false, [&](std::size_t i) { v[i] += a[i] * (0.5 * dt); });  // kick
       break;
     }
     case Integrator::RK4: {
@@ -385,41 +378,50 @@ void World::step() {
       stageState(dt, k3x, k3v, nullptr);
       accelerations(xs, vs, t + dt, k4v);
       const double w = dt / 6.0;
-      forVertices([&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) {
-          // k4x = vs (the fourth stage's velocity).
-          x[i] += (k1x[i] + (k2x[i] + k3x[i]) * 2.0 + vs[i]) * w;
-          v[i] += (k1v[i] + (k2v[i] + k3v[i]) * 2.0 + k4v[i]) * w;
-        }
+      lastPass(true, [&](std::size_t i) {
+        // k4x = vs (the fourth stage's velocity).
+        x[i] += (k1x[i] + (k2x[i] + k3x[i]) * 2.0 + vs[i]) * w;
+        v[i] += (k1v[i] + (k2v[i] + k3v[i]) * 2.0 + k4v[i]) * w;
       });
       break;
     }
     case Integrator::BackwardEuler:
       implicit_->step(*this, x_, v_, t, dt);
+      if (!model_.colliders.empty()) lastPass(false, [](std::size_t) {});
       break;
   }
   time_ = t + dt;
   ++steps_;
-  if (!model_.colliders.empty()) collide();
 }
 
-void World::collide() {
-  const Colliders& colliders = model_.colliders;
+template <class Update>
+void World::lastPass(bool saveOld, Update&& update) {
+  // One fork-join: each thread saves, updates and resolves the contacts of its own vertices
+  // (a vertex's contact reads only its own old and new state).
+  const bool contacts = !model_.colliders.empty();
   std::atomic<bool> touched{false};
-  const bool layers = dampingLayers_;
+  Vec3 *x = x_.data(), *xOld = xOld_.data();
   forVertices([&](std::size_t begin, std::size_t end) {
-    bool hitAny = false;
-    for (std::size_t i = begin; i < end; ++i) {
-      if (model_.invMass[i] == 0.0) continue;  // pinned
-      const bool hit =
-          !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
-      sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
-      const bool damped = layers && colliders.dampInLayers(x_[i], v_[i], dt_);
-      hitAny = hitAny || hit || damped;
-    }
-    if (hitAny) touched.store(true, std::memory_order_relaxed);
+    if (contacts && saveOld) std::copy(x + begin, x + end, xOld + begin);
+    for (std::size_t i = begin; i < end; ++i) update(i);
+    if (contacts && collide(begin, end)) touched.store(true, std::memory_order_relaxed);
   });
   if (touched.load(std::memory_order_relaxed)) cachedAccelerationValid_ = false;
+}
+
+bool World::collide(std::size_t begin, std::size_t end) {
+  const Colliders& colliders = model_.colliders;
+  const bool layers = dampingLayers_;
+  bool hitAny = false;
+  for (std::size_t i = begin; i < end; ++i) {
+    if (model_.invMass[i] == 0.0) continue;  // pinned
+    const bool hit =
+        !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
+    sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
+    const bool damped = layers && colliders.dampInLayers(x_[i], v_[i], dt_);
+    hitAny = hitAny || hit || damped;
+  }
+  return hitAny;
 }
 
 }  // namespace springy

@@ -108,7 +108,14 @@ class World {
   // Runs fn(begin, end) over [0, vertexCount) split among the threads.
   template <class F>
   void forVertices(F&& fn) const;
-  void collide();
+  // The step's last pass over the vertices, update(i) for each, with the contacts of the same
+  // vertices after it; saveOld first copies x to xOld (for integrators that change x only
+  // here). Marks the cached acceleration invalid when a contact changed a velocity.
+  template <class Update>
+  void lastPass(bool saveOld, Update&& update);
+  // Resolves the contacts of vertices [begin, end) along their paths xOld -> x; true if any
+  // vertex touched a collider or a damping layer.
+  bool collide(std::size_t begin, std::size_t end);
   // The gas stage's pressures for positions x: each gas body's volume (chunks of faces summed
   // by the threads, then the chunks' sums in order: enclosedVolume's number on every thread
   // count), then its overpressure.

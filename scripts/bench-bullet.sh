@@ -180,37 +180,50 @@ bullet_table() {
   echo
 }
 if [ "$side" = gas ]; then
-  # The gas ball: strut period x volume period; per cell the largest dt on the grid that passes
-  # (raising dt until the first failure), its max edge strain and min volume.
-  gas_with() {  # STRUT_PERIOD VOLUME_PERIOD -> a temporary scene file
-    local f="$tmp/gas_s$1_v$2.toml"
+  # The gas ball: per cell the largest dt on the grid that passes (raising dt until the first
+  # failure), its max edge strain and min volume; first strut period x volume period at the
+  # scene's strut decay, then strut period x strut decay at the scene's volume period.
+  gas_with() {  # STRUT_PERIOD VOLUME_PERIOD STRUT_DECAY -> a temporary scene file
+    local f="$tmp/gas_s$1_v$2_d$3.toml"
     sed -e "s/^strut_period = [0-9.e-]*/strut_period = $1/" -e "s/^volume_period = [0-9.e-]*/volume_period = $2/" \
-      "$gas_scene" >"$f"
+      -e "s/^strut_decay = [0-9.e-]*/strut_decay = $3/" "$gas_scene" >"$f"
     echo "$f"
   }
-  vps=(0.005 0.01 0.02)
-  echo "## springy with gas: largest passing dt per strut and volume period"
-  echo
-  echo "symplectic_euler, strut_decay 0.1 s, no hinges; dt from 1 1.25 1.5 1.75 2 2.5 3 ms upward until"
-  echo "the first failure of \`springy check --min-volume 0.95\`. Cell: largest passing dt [ms], its max edge"
-  echo "strain, min volume. —: none passes."
-  echo
-  printf '| strut_period \\ volume_period |'; for vp in "${vps[@]}"; do printf ' %s |' "$vp"; done; echo
-  printf '|---|'; for _ in "${vps[@]}"; do printf -- '---|'; done; echo
-  for sp in 0.01 0.0125 0.015 0.0175 0.02; do
-    printf '| %s |' "$sp"
-    for vp in "${vps[@]}"; do
-      f=$(gas_with "$sp" "$vp") cell=—
-      for dt in 0.001 0.00125 0.0015 0.00175 0.002 0.0025 0.003; do
-        read -r st _ wall vmin _ _ _ strain <<<"$(springy_run "$f" --dt "$dt" --threads 1)"
-        echo "  springy gas strut $sp volume $vp dt $dt: $st (strain $strain, min volume $vmin, $wall s)" >&2
-        [ "$st" = ok ] || break
-        cell=$(awk -v d="$dt" -v s="$strain" -v v="$vmin" 'BEGIN { printf "%g, %.3f, %.3f", 1000 * d, s, v }')
-      done
-      printf ' %s |' "$cell"
+  scene_value() { sed -n "s/^$1 = \([0-9.e-]*\).*/\1/p" "$gas_scene"; }
+  decay=$(scene_value strut_decay) vp0=$(scene_value volume_period)
+  gas_cell() {  # STRUT_PERIOD VOLUME_PERIOD STRUT_DECAY -> one table cell
+    local f cell=— dt st wall vmin strain
+    f=$(gas_with "$1" "$2" "$3")
+    for dt in 0.001 0.00125 0.0015 0.00175 0.002 0.0025 0.003; do
+      read -r st _ wall vmin _ _ _ strain <<<"$(springy_run "$f" --dt "$dt" --threads 1)"
+      echo "  springy gas strut $1 volume $2 decay $3 dt $dt: $st (strain $strain, min volume $vmin, $wall s)" >&2
+      [ "$st" = ok ] || break
+      cell=$(awk -v d="$dt" -v s="$strain" -v v="$vmin" 'BEGIN { printf "%g, %.3f, %.3f", 1000 * d, s, v }')
+    done
+    printf ' %s |' "$cell"
+  }
+  gas_table() {  # ROW_NAME COLUMN_NAME COLUMNS... ; cells from gas_cell_for ROW COLUMN
+    local row_name=$1 column_name=$2 row column
+    shift 2
+    printf '| %s \\ %s |' "$row_name" "$column_name"; for column in "$@"; do printf ' %s |' "$column"; done; echo
+    printf '|---|'; for _ in "$@"; do printf -- '---|'; done; echo
+    for row in 0.0125 0.015 0.0175; do
+      printf '| %s |' "$row"
+      for column in "$@"; do gas_cell_for "$row" "$column"; done
+      echo
     done
     echo
-  done
+  }
+  echo "## springy with gas: largest passing dt per strut period, volume period and strut decay"
+  echo
+  echo "symplectic_euler, no hinges; dt from 1 1.25 1.5 1.75 2 2.5 3 ms upward until the first failure"
+  echo "of \`springy check --min-volume 0.95\`. Cell: largest passing dt [ms], its max edge strain, min"
+  echo "volume. —: none passes. First strut_decay $decay s, then volume_period $vp0 s (the scene's)."
+  echo
+  gas_cell_for() { gas_cell "$1" "$2" "$decay"; }
+  gas_table strut_period volume_period 0.005 0.01 0.02
+  gas_cell_for() { gas_cell "$1" "$vp0" "$2"; }
+  gas_table strut_period strut_decay 0.05 0.1 0.15 0.2 0.3
   exit 0
 fi
 iters=(1 2 3 4 6 8 11 16 23 32 45 64)

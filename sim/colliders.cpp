@@ -186,10 +186,4 @@ bool Colliders::dampInLayers(const Vec3& x, Vec3& velocity, double dt) const {
   return inside;
 }
 
-double Colliders::planePenetration(const Vec3& p) const {
-  double depth = 0.0;
-  for (const PlaneCollider& pl : planes) depth = std::max(depth, -dot(p - pl.point, pl.normal));
-  return depth;
-}
-
 }  // namespace springy

@@ -19,6 +19,7 @@
 // by that much, O(dt^2).)
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -95,7 +96,11 @@ struct Colliders {
     return true;
   }
   // Largest depth of a point behind any plane (0 when in front of all) [m].
-  double planePenetration(const Vec3& p) const;
+  double planePenetration(const Vec3& p) const {
+    double depth = 0.0;
+    for (const PlaneCollider& pl : planes) depth = std::max(depth, -dot(p - pl.point, pl.normal));
+    return depth;
+  }
   // Whether any plane has a damping layer.
   bool dampingLayers() const;
   // Damps the normal velocity of a vertex at x inside a plane's damping layer over a step dt:

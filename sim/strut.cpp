@@ -96,14 +96,44 @@ __attribute__((target_clones("avx2", "default"))) void applyStrutsOwned(const St
       x, v, f);
 }
 
-StrutMeasures measureStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x) {
-  StrutMeasures m;
-  for (std::size_t s = begin; s < end; ++s) {
-    const Strut& st = struts[s];
-    const double stretch = length(x[st.j] - x[st.i]) - st.restLength;
-    m.energy += 0.5 * st.stiffness * stretch * stretch;
-    m.maxStrain = std::max(m.maxStrain, std::fabs(stretch) / st.restLength);
+namespace {
+
+inline void measureStrut(const Strut& st, const Vec3* x, double& energy, double& maxStrain) {
+  const double stretch = length(x[st.j] - x[st.i]) - st.restLength;
+  energy += 0.5 * st.stiffness * stretch * stretch;
+  maxStrain = std::max(maxStrain, std::fabs(stretch) / st.restLength);
+}
+
+}  // namespace
+
+// Four struts at a time in vector lanes, each lane summing its own energies (the square roots
+// and divisions, as in the force kernel, are what one strut at a time waits on); the lanes'
+// sums are added in lane order at the end, so the result depends only on [begin, end).
+__attribute__((target_clones("avx2", "default"))) StrutMeasures measureStruts(const Strut* struts, std::size_t begin,
+                                                                              std::size_t end, const Vec3* x) {
+  Lanes energy = {0.0, 0.0, 0.0, 0.0}, strain = {0.0, 0.0, 0.0, 0.0};
+  std::size_t s = begin;
+  for (; s + 4 <= end; s += 4) {
+    Lanes dx, dy, dz, k, l0;
+    for (int l = 0; l < 4; ++l) {
+      const Strut& st = struts[s + static_cast<std::size_t>(l)];
+      const Vec3 xij = x[st.j] - x[st.i];
+      dx[l] = xij.x, dy[l] = xij.y, dz[l] = xij.z;
+      k[l] = st.stiffness, l0[l] = st.restLength;
+    }
+    const Lanes ll = dx * dx + dy * dy + dz * dz;
+    Lanes stretch;
+    for (int l = 0; l < 4; ++l) stretch[l] = std::sqrt(ll[l]);
+    stretch = stretch - l0;
+    energy += 0.5 * k * stretch * stretch;
+    const Lanes magnitude = stretch < 0.0 ? -stretch : stretch;
+    const Lanes ratio = magnitude / l0;
+    strain = strain < ratio ? ratio : strain;  // std::max's order: a NaN ratio leaves strain
   }
+  StrutMeasures m;
+  m.energy = ((energy[0] + energy[1]) + energy[2]) + energy[3];
+  m.maxStrain = std::max({strain[0], strain[1], strain[2], strain[3]});
+  for (; s < end; ++s) measureStrut(struts[s], x, m.energy, m.maxStrain);
   return m;
 }
 

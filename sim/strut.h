@@ -21,7 +21,8 @@ void applyStrutsOwned(const Strut* struts, const ElementRef* list, std::size_t c
                  Vec3* f);
 
 // Elastic energy 1/2 k (l - l0)^2 summed over struts [begin, end), and the largest strain
-// |l - l0| / l0 among them.
+// |l - l0| / l0 among them. The energies are summed in four interleaved partial sums (struts
+// begin + 4q + r go to sum r), then the rest one at a time: the same bits for the same range.
 struct StrutMeasures {
   double energy = 0.0;
   double maxStrain = 0.0;

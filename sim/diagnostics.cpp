@@ -66,30 +66,39 @@ BodyMeasures measureBody(const World& world, uint32_t body) {
   std::vector<RegionSums> sums(regions);
   world.parallelFor(regions, [&](std::size_t first, std::size_t last) {
     for (std::size_t r = first; r < last; ++r) {
-      RegionSums& m = sums[r];
+      RegionSums m;  // a local, so that the running sums stay in registers
       const uint32_t begin = info.firstVertex + static_cast<uint32_t>(r) * kRegionVertices;
       const uint32_t end = std::min(begin + kRegionVertices, info.firstVertex + info.vertexCount);
       m.lo = m.hi = x[begin];
+      // Two passes, positions then motion: one would hold more running sums than there are
+      // registers, and the spilled ones wait on memory.
+      bool finite = true;
       for (uint32_t i = begin; i < end; ++i) {
         const double mi = model.mass[i];
-        m.finite = m.finite && isFinite(x[i]) && isFinite(v[i]);
+        finite = finite && isFinite(x[i]);
         m.mass += mi;
         m.centroid += x[i] * mi;
-        m.momentum += v[i] * mi;
-        m.angularMomentum += cross(x[i], v[i]) * mi;
-        m.kinetic += 0.5 * mi * lengthSquared(v[i]);
         m.gravitational -= mi * dot(model.gravity, x[i]);
-        m.speedSquared += lengthSquared(v[i]);
         m.lo = componentMin(m.lo, x[i]);
         m.hi = componentMax(m.hi, x[i]);
         m.penetration = std::max(m.penetration, model.colliders.planePenetration(x[i]));
       }
+      for (uint32_t i = begin; i < end; ++i) {
+        const double mi = model.mass[i];
+        finite = finite && isFinite(v[i]);
+        m.momentum += v[i] * mi;
+        m.angularMomentum += cross(x[i], v[i]) * mi;
+        m.kinetic += 0.5 * mi * lengthSquared(v[i]);
+        m.speedSquared += lengthSquared(v[i]);
+      }
+      m.finite = finite;
       const StrutMeasures struts = measureStruts(model.struts.data(), strutAt[r], strutAt[r + 1], x);
       m.elastic = struts.energy + hingeEnergy(model.hinges.data(), hingeAt[r], hingeAt[r + 1], x);
       m.maxStrain = struts.maxStrain;
       for (std::size_t c = r * chunks / regions; c < (r + 1) * chunks / regions; ++c) {
         chunkSum[c] = chunkSixVolume(model, body, static_cast<uint32_t>(c), x);
       }
+      sums[r] = m;
     }
   });
   BodyMeasures m;

@@ -167,17 +167,28 @@ void addBody(Model& model, const BodyDesc& desc) {
     }
   }
 
-  // Directed edges, sorted, to pair each edge with its twin (the neighbouring face).
-  std::vector<DirectedEdge> edges;
-  edges.reserve(mesh.triangles.size() * 3);
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const Triangle& t = mesh.triangles[f];
-    for (int k = 0; k < 3; ++k) edges.push_back({t[k], t[(k + 1) % 3], static_cast<uint32_t>(f)});
+  // Directed edges in (from, to, face) order, to pair each edge with its twin (the
+  // neighbouring face): bucketed by their first vertex, each vertex's few then sorted; a twin
+  // is looked up among its start vertex's edges.
+  std::vector<uint32_t> edgeStart(nv + 1, 0);
+  for (const Triangle& t : mesh.triangles) {
+    for (uint32_t v : t) ++edgeStart[v + 1];
   }
-  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0; i < nv; ++i) edgeStart[i + 1] += edgeStart[i];
+  std::vector<DirectedEdge> edges(mesh.triangles.size() * 3);
+  {
+    std::vector<uint32_t> next(edgeStart.begin(), edgeStart.end() - 1);
+    for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+      const Triangle& t = mesh.triangles[f];
+      for (int k = 0; k < 3; ++k) edges[next[t[k]]++] = {t[k], t[(k + 1) % 3], static_cast<uint32_t>(f)};
+    }
+  }
+  for (std::size_t i = 0; i < nv; ++i) std::sort(edges.begin() + edgeStart[i], edges.begin() + edgeStart[i + 1]);
   auto findEdge = [&](uint32_t a, uint32_t b) -> const DirectedEdge* {
-    auto it = std::lower_bound(edges.begin(), edges.end(), DirectedEdge{a, b, 0});
-    return it != edges.end() && it->from == a && it->to == b ? &*it : nullptr;
+    for (uint32_t k = edgeStart[a]; k < edgeStart[a + 1]; ++k) {
+      if (edges[k].to == b) return &edges[k];  // the first: the lowest face
+    }
+    return nullptr;
   };
   auto thirdVertex = [&](uint32_t face, uint32_t a, uint32_t b) {
     for (uint32_t v : mesh.triangles[face]) {

@@ -109,27 +109,30 @@ double gasEnergy(const BodyInfo& body, double volume) {
   return body.gasPressure * body.restVolume * (d - std::log1p(d));
 }
 
-void applyGasPressure(const Model& model, const double* overpressure, std::size_t begin, std::size_t end,
-                      const Vec3* areaVectors, Vec3* f) {
-  for (std::size_t k = begin; k < end; ++k) {
-    const Triangle& t = model.faces[k];
-    const double p = overpressure[model.body[t[0]]];
-    if (p == 0.0) continue;
-    const Vec3 force = areaVectors[k] * (p / 6.0);
-    for (uint32_t i : t) f[i] += force;
+VertexFaces vertexFaces(const Model& model) {
+  VertexFaces around;
+  const std::size_t n = model.vertexCount();
+  around.start.assign(n + 1, 0);
+  for (const Triangle& t : model.faces) {
+    for (uint32_t i : t) ++around.start[i + 1];
   }
+  for (std::size_t i = 0; i < n; ++i) around.start[i + 1] += around.start[i];
+  around.faces.resize(around.start[n]);
+  std::vector<uint32_t> next(around.start.begin(), around.start.end() - 1);
+  for (uint32_t k = 0; k < model.faces.size(); ++k) {
+    for (uint32_t i : model.faces[k]) around.faces[next[i]++] = k;
+  }
+  return around;
 }
 
-void applyGasPressureOwned(const Model& model, const double* overpressure, const ElementRef* list, std::size_t count,
-                           const Vec3* areaVectors, Vec3* f) {
-  for (std::size_t r = 0; r < count; ++r) {
-    const Triangle& t = model.faces[list[r].index];
-    const double p = overpressure[model.body[t[0]]];
+void applyGasPressure(const Model& model, const double* overpressure, const VertexFaces& around,
+                      const Vec3* areaVectors, std::size_t begin, std::size_t end, Vec3* f) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const double p = overpressure[model.body[i]];
     if (p == 0.0) continue;
-    const Vec3 force = areaVectors[list[r].index] * (p / 6.0);
-    for (int i = 0; i < 3; ++i) {
-      if (list[r].mask & (1u << i)) f[t[i]] += force;
-    }
+    Vec3 sum;
+    for (uint32_t k = around.start[i]; k < around.start[i + 1]; ++k) sum += areaVectors[around.faces[k]];
+    f[i] += sum * (p / 6.0);
   }
 }
 

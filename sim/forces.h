@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "sim/model.h"
 #include "sim/parallel.h"
@@ -54,13 +56,17 @@ double chunkSixVolume(const Model& model, uint32_t body, uint32_t chunk, const V
 double gasOverpressure(const BodyInfo& body, double volume);
 // p0 V0 (V / V0 - 1 - ln(V / V0)) [J]: +inf for V <= 0.
 double gasEnergy(const BodyInfo& body, double volume);
-// Gas pressure on faces [begin, end); overpressure[b] is body b's (0 for bodies without gas),
-// areaVectors[face] the face's N from sixVolume at the same positions (read only for faces of
-// bodies with an overpressure).
-void applyGasPressure(const Model& model, const double* overpressure, std::size_t begin, std::size_t end,
-                      const Vec3* areaVectors, Vec3* f);
-// The same for the listed faces, adding only to the corners whose bit is set in the mask.
-void applyGasPressureOwned(const Model& model, const double* overpressure, const ElementRef* list, std::size_t count,
-                           const Vec3* areaVectors, Vec3* f);
+// The faces around each vertex, in face order (compressed rows: vertex i's are
+// faces[start[i]] to faces[start[i + 1] - 1]).
+struct VertexFaces {
+  std::vector<uint32_t> start, faces;
+};
+VertexFaces vertexFaces(const Model& model);
+// Gas pressure on vertices [begin, end): vertex i of a body with overpressure p (overpressure[b],
+// 0 for bodies without gas) receives p / 6 times the sum of the area vectors of its faces
+// (areaVectors[face], sixVolume's N at the same positions), summed in face order. Gathered per
+// vertex, a thread computes its own vertices' forces and writes nothing else.
+void applyGasPressure(const Model& model, const double* overpressure, const VertexFaces& around,
+                      const Vec3* areaVectors, std::size_t begin, std::size_t end, Vec3* f);
 
 }  // namespace springy

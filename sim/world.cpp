@@ -84,6 +84,7 @@ World::World(Model model, Integrator integrator, double dt)
     forceStages_.push_back(ForceStage::Gas);
     overpressure_.assign(model_.bodies.size(), 0.0);
     areaVectors_.assign(model_.faces.size(), Vec3{});
+    facesAround_ = vertexFaces(model_);
   }
   for (TriangleCollider& tc : model_.colliders.meshes) {
     if (tc.nodes.empty()) tc.buildBvh();
@@ -242,7 +243,7 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
         applyHinges(model_.hinges.data(), hingeTerms_.data(), 0, model_.hinges.size(), x, v, f);
         break;
       case ForceStage::Gas:
-        applyGasPressure(model_, overpressure_.data(), 0, model_.faces.size(), areaVectors_.data(), f);
+        applyGasPressure(model_, overpressure_.data(), facesAround_, areaVectors_.data(), 0, n, f);
         break;
     }
   }
@@ -265,8 +266,7 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
         applyHingesOwned(model_.hinges.data(), hingeTerms_.data(), share.hinges.data(), share.hinges.size(), x, v, f);
         break;
       case ForceStage::Gas:
-        applyGasPressureOwned(model_, overpressure_.data(), share.faces.data(), share.faces.size(),
-                              areaVectors_.data(), f);
+        applyGasPressure(model_, overpressure_.data(), facesAround_, areaVectors_.data(), share.begin, share.end, f);
         break;
     }
   }

@@ -22,6 +22,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/model.h"
 #include "sim/parallel.h"
@@ -157,6 +158,7 @@ class World {
   mutable std::vector<double> chunkSum_;       // per chunk: six times its volume
   mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
   mutable std::vector<Vec3> areaVectors_;      // per face of a gas body: N of sixVolume, same evaluation
+  VertexFaces facesAround_;                    // the gas stage's faces per vertex
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
 };

@@ -65,7 +65,7 @@ TEST(Gas, ForceIsMinusTheGradientOfItsEnergy) {
   ASSERT_GT(p, 0.0);
   std::vector<Vec3> f(x.size()), areaVectors(model.faces.size());
   sixVolume(model, 0, static_cast<uint32_t>(model.faces.size()), x[0], x.data(), areaVectors.data());
-  applyGasPressure(model, &p, 0, model.faces.size(), areaVectors.data(), f.data());
+  applyGasPressure(model, &p, vertexFaces(model), areaVectors.data(), 0, x.size(), f.data());
   const double h = 1e-6;
   double worst = 0.0, scale = 0.0;
   for (std::size_t i = 0; i < x.size(); ++i) {

@@ -22,8 +22,8 @@ inline bool windForce(const Triangle& t, double c, const Vec3& air, const Vec3* 
 
 }  // namespace
 
-void applyGravity(const Model& model, std::size_t begin, std::size_t end, Vec3* f) {
-  for (std::size_t i = begin; i < end; ++i) f[i] += model.gravity * model.mass[i];
+void setGravity(const Model& model, std::size_t begin, std::size_t end, Vec3* f) {
+  for (std::size_t i = begin; i < end; ++i) f[i] = model.gravity * model.mass[i];
 }
 
 void applyDrag(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* v, Vec3* f) {

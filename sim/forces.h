@@ -11,8 +11,9 @@
 
 namespace springy {
 
-// f_i += m_i g
-void applyGravity(const Model& model, std::size_t begin, std::size_t end, Vec3* f);
+// f_i = m_i g: gravity is the first stage when present, and starts the sum the other stages add
+// to (instead of zeros and an addition: one pass fewer).
+void setGravity(const Model& model, std::size_t begin, std::size_t end, Vec3* f);
 
 // f_i += -c m_i (v_i - w): linear drag relative to the air (w = 0 without wind), seed 3.2's
 // "plain velocity drag" made independent of mesh resolution by scaling with the vertex mass.

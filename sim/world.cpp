@@ -94,7 +94,7 @@ World::World(Model model, Integrator integrator, double dt)
   const std::size_t n = model_.vertexCount();
   x_ = model_.restPosition;
   v_ = model_.initialVelocity;
-  for (auto* buffer : {&xOld_, &a_, &forceScratch_}) buffer->assign(n, Vec3{});
+  for (auto* buffer : {&xOld_, &a_}) buffer->assign(n, Vec3{});
   if (!model_.colliders.empty()) sinceContact_.assign(n, 0xFFFF);
   restingSteps_ = static_cast<int>(std::ceil(model_.colliders.restingWindow / dt_));
   if (integrator_ == Integrator::RK4) {
@@ -232,10 +232,10 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
     return;
   }
   const std::size_t n = model_.vertexCount();
-  std::fill(f, f + n, Vec3{});
+  if (!startsWithGravity()) std::fill(f, f + n, Vec3{});
   for (ForceStage stage : forceStages_) {
     switch (stage) {
-      case ForceStage::Gravity: applyGravity(model_, 0, n, f); break;
+      case ForceStage::Gravity: setGravity(model_, 0, n, f); break;
       case ForceStage::Drag: applyDrag(model_, 0, n, air, v, f); break;
       case ForceStage::Wind: applyWindPressure(model_, 0, model_.faces.size(), air, x, v, f); break;
       case ForceStage::Struts: applyStruts(model_.struts.data(), 0, model_.struts.size(), x, v, f); break;
@@ -255,10 +255,10 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
   // vertices: each vertex receives the same terms in the same order.
   const Share& share = shares_[thread];
   prefetchForeign(thread, x, v);
-  std::fill(f + share.begin, f + share.end, Vec3{});
+  if (!startsWithGravity()) std::fill(f + share.begin, f + share.end, Vec3{});
   for (ForceStage stage : forceStages_) {
     switch (stage) {
-      case ForceStage::Gravity: applyGravity(model_, share.begin, share.end, f); break;
+      case ForceStage::Gravity: setGravity(model_, share.begin, share.end, f); break;
       case ForceStage::Drag: applyDrag(model_, share.begin, share.end, air, v, f); break;
       case ForceStage::Wind: applyWindPressureOwned(model_, share.faces.data(), share.faces.size(), air, x, v, f); break;
       case ForceStage::Struts: applyStrutsOwned(model_.struts.data(), share.struts.data(), share.struts.size(), x, v, f); break;
@@ -282,10 +282,9 @@ void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const
     pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, a, true); });
     return;
   }
-  Vec3* f = forceScratch_.data();
-  computeForces(x, v, t, f);
+  computeForces(x, v, t, a);
   const std::size_t n = model_.vertexCount();
-  for (std::size_t i = 0; i < n; ++i) a[i] = f[i] * model_.invMass[i];  // pinned: invMass 0
+  for (std::size_t i = 0; i < n; ++i) a[i] = a[i] * model_.invMass[i];  // pinned: invMass 0
 }
 
 void World::step() {

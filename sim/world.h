@@ -102,6 +102,8 @@ class World {
 
  private:
   void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const;
+  // Gravity, when present, is the first stage and writes the forces; otherwise they start at 0.
+  bool startsWithGravity() const { return !forceStages_.empty() && forceStages_[0] == ForceStage::Gravity; }
   // One thread's share of a force evaluation: the forces on its own vertices (a contiguous
   // range), optionally divided by the masses, written to f. Threads write disjoint ranges.
   void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
@@ -143,7 +145,6 @@ class World {
   std::vector<Vec3> x_, v_;
   // Scratch, sized once.
   std::vector<Vec3> xOld_, a_, k1v_, k2x_, k2v_, k3x_, k3v_, k4v_, xs_, vs_, aNext_;
-  mutable std::vector<Vec3> forceScratch_;
   std::vector<uint16_t> sinceContact_;  // steps since each vertex last touched a collider
   int restingSteps_ = 0;                // contact within this many steps is resting contact
   bool dampingLayers_ = false;          // a plane has a damping layer (soft ground)

@@ -31,10 +31,11 @@ void applyWindPressureOwned(const Model& model, const ElementRef* list, std::siz
 // an isothermal ideal gas, p V = const, inside a closed body, at the ambient pressure p0 when
 // the volume is the rest volume V0. Its pressure over the ambient, p = p0 (V0 / V - 1), pushes
 // every face outward; the volume is exact by the divergence theorem, V = 1/6 sum_f x0 . (x1 x x2)
-// over the outward faces, and the force on vertex i is p dV/dx_i, where each face adds
+// over the outward faces, and the force on vertex i is p dV/dx_i, where each face contributes
 // N / 6 = (x1 - x0) x (x2 - x0) / 6 (a third of its area vector) to each of its corners. The
 // volume pass computes each face's N once: its term is x0 . N (the same triple product), and it
-// keeps N for the force pass at the same positions. That force is
+// keeps N for the force pass at the same positions, where each vertex sums its faces' N. That
+// force is
 // -dE/dx of the gas's energy E = p0 V0 (V / V0 - 1 - ln(V / V0)) (the work the gas and the
 // ambient do on the body), whose second derivative at V0 is p0 / V0: the breathing stiffness.
 

@@ -11,7 +11,8 @@
 //   - each thread walks, in index order, the elements that touch a vertex it owns, and adds an
 //     element's force only to the vertices it owns (ElementRef::mask); an element across a range
 //     boundary is evaluated by each thread that owns one of its vertices (a few percent of
-//     the work, measured in docs/benchmarks.md);
+//     the work, measured in docs/benchmarks.md); the gas instead has each vertex gather its
+//     faces' area vectors in face order (sim/forces.h);
 //   - no two threads ever write the same vertex, so there are no atomics and no locks, and each
 //     vertex sees the same terms in the same order as with one thread.
 // Per-vertex loops (integrator updates, collisions) are split into contiguous index ranges;

@@ -31,6 +31,7 @@ constexpr const char* kMeshVs = R"(#version 330 core
 layout(location = 0) in vec3 aPos;
 layout(location = 1) in vec3 aNormal;
 uniform mat4 uViewProj;
+invariant gl_Position;  // the ground is drawn by two variants and must land on the same depths
 uniform mat4 uLightViewProj;
 uniform float uNormalOffset;
 out vec3 vPos;
@@ -629,6 +630,35 @@ struct Renderer::Impl {
     return *p;
   }
 
+  // The screen rectangle (x, y, width, height; empty when off screen) that holds every pixel of
+  // ground g the shadow map covers: the light frustum's sides, followed along the light onto the
+  // ground's plane, projected by the camera. None (shade all of it with shadows) when the light
+  // grazes the plane or a corner lies behind the camera.
+  std::optional<glm::ivec4> shadowFootprint(const GpuMesh& g) const {
+    const glm::vec3 n = glm::normalize(glm::cross(g.groundU, g.groundV));
+    const glm::vec3 d = glm::normalize(light.direction);
+    const float along = glm::dot(d, n);
+    if (std::abs(along) < 0.05f) return std::nullopt;
+    const glm::mat4 toWorld = glm::inverse(frameUniforms.lightVP);
+    glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+    for (int k = 0; k < 4; ++k) {
+      const glm::vec4 w = toWorld * glm::vec4((k & 1) ? 1.0f : -1.0f, (k & 2) ? 1.0f : -1.0f, -1.0f, 1.0f);
+      const glm::vec3 c = glm::vec3(w) / w.w;
+      const glm::vec3 onPlane = c + d * (glm::dot(g.groundOrigin - c, n) / along);
+      const glm::vec4 clip = frameUniforms.viewProj * glm::vec4(onPlane, 1.0f);
+      if (!(clip.w > 1e-4f)) return std::nullopt;
+      const glm::vec2 ndc = glm::vec2(clip) / clip.w;
+      lo = glm::min(lo, ndc);
+      hi = glm::max(hi, ndc);
+    }
+    // Pixels, widened by 4: the normal offset and the filter taps reach a little past the sides.
+    const glm::vec2 size(static_cast<float>(settings.width), static_cast<float>(settings.height));
+    const glm::vec2 pLo = glm::clamp((lo * 0.5f + 0.5f) * size - 4.0f, glm::vec2(0.0f), size);
+    const glm::vec2 pHi = glm::clamp((hi * 0.5f + 0.5f) * size + 4.0f, glm::vec2(0.0f), size);
+    const glm::ivec2 a(glm::floor(pLo)), b(glm::ceil(pHi));
+    return glm::ivec4(a.x, a.y, std::max(b.x - a.x, 0), std::max(b.y - a.y, 0));
+  }
+
   static glm::vec3 toLinear(glm::vec3 c) { return glm::pow(glm::max(c, glm::vec3(0.0f)), glm::vec3(2.2f)); }
 
   // layerAlpha: a translucent body is drawn as two layers (inside, then outside); each gets the
@@ -726,9 +756,26 @@ struct Renderer::Impl {
       else drawMesh(shadowsOn, m);
     }
     mark(RenderPass::Opaque);
-    // Grounds (opaque: they mix the sky colour into their faded edge themselves).
+    // Grounds (opaque: they mix the sky colour into their faded edge themselves). A ground
+    // receives the shadow map only where the map reaches it: llvmpipe runs the shadow taps for
+    // every pixel the shadowing variant shades, also where they return "lit". So each ground is
+    // drawn without them, then again with them inside the screen rectangle around that
+    // footprint (the same vertices and depths: LEQUAL passes exactly where it was drawn); the
+    // image is the same.
     if (!grounds.empty()) {
-      for (const GpuMesh* g : grounds) drawMesh(shadowsOn, *g);
+      for (const GpuMesh* g : grounds) {
+        const std::optional<glm::ivec4> rect = shadowsOn ? shadowFootprint(*g) : std::nullopt;
+        if (!rect) {
+          drawMesh(shadowsOn, *g);
+          continue;
+        }
+        drawMesh(false, *g);
+        if ((*rect)[2] <= 0 || (*rect)[3] <= 0) continue;  // the footprint is off screen
+        glEnable(GL_SCISSOR_TEST);
+        glScissor((*rect)[0], (*rect)[1], (*rect)[2], (*rect)[3]);
+        drawMesh(true, *g);
+        glDisable(GL_SCISSOR_TEST);
+      }
       mark(RenderPass::Ground);
     }
     // The sky on the far plane, after the opaque meshes: early depth testing leaves out every

@@ -138,8 +138,11 @@ std::string meshVariantSource(bool shadows, bool ground, bool flat) {
 
 // FXAA-style anti-aliasing (after Lottes' FXAA, "console" variant): the luma of the 4 diagonal
 // neighbours gives the edge direction; two and four taps along the edge are blended; pixels
-// whose neighbourhood contrast is low keep their exact colour (texelFetch).
-constexpr const char* kFxaaFs = R"(#version 330 core
+// whose neighbourhood contrast is low keep their exact colour (texelFetch). Two passes, because
+// llvmpipe runs both sides of a branch: EDGE_PASS writes every pixel's exact colour and marks
+// the edge pixels in the depth buffer (depth 0, the rest 1); the blend pass, drawn at depth 0.5
+// with GL_GREATER, then runs only where an edge was marked (early depth test).
+constexpr const char* kFxaaFsBody = R"(
 uniform sampler2D uScene;
 uniform vec2 uTexel;  // 1 / frame size
 out vec4 fragColour;
@@ -155,7 +158,12 @@ void main() {
   float lM = luma(rgbM);
   float lMin = min(lM, min(min(lNW, lNE), min(lSW, lSE)));
   float lMax = max(lM, max(max(lNW, lNE), max(lSW, lSE)));
-  if (lMax - lMin < max(0.0312, lMax * 0.125)) {  // no edge here: the exact colour
+  bool edge = !(lMax - lMin < max(0.0312, lMax * 0.125));
+#if EDGE_PASS
+  fragColour = vec4(rgbM, 1.0);  // no edge here: the exact colour
+  gl_FragDepth = edge ? 0.0 : 1.0;
+#else
+  if (!edge) {
     fragColour = vec4(rgbM, 1.0);
     return;
   }
@@ -170,8 +178,12 @@ void main() {
                                    textureLod(uScene, uv + dir * 0.5, 0.0).rgb);
   float lB = luma(rgbB);
   fragColour = vec4((lB < lMin || lB > lMax) ? rgbA : rgbB, 1.0);
+#endif
 }
 )";
+std::string fxaaSource(bool edgePass) {
+  return std::string("#version 330 core\n#define EDGE_PASS ") + (edgePass ? "1" : "0") + "\n" + kFxaaFsBody;
+}
 
 constexpr const char* kDepthVs = R"(#version 330 core
 layout(location = 0) in vec3 aPos;
@@ -187,6 +199,13 @@ void main() {
   // One triangle covering the screen.
   vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
   gl_Position = vec4(p, 1.0, 1.0);  // on the far plane: depth 1, behind everything
+}
+)";
+// One triangle covering the screen at depth 0.5 (the FXAA blend pass).
+constexpr const char* kMidVs = R"(#version 330 core
+void main() {
+  vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
 }
 )";
 constexpr const char* kSkyFs = R"(#version 330 core
@@ -342,7 +361,7 @@ struct Renderer::Impl {
   GlContext ctx;
   // Mesh shader variants, compiled on first use: index = shadows | ground << 1 | flat << 2.
   std::optional<Program> meshProgs[8];
-  Program depthProg, skyProg, overlayProg, fxaaProg;
+  Program depthProg, skyProg, overlayProg, fxaaEdgeProg, fxaaProg;
   // Per frame: which mesh variants got this frame's shared uniforms, and what they are.
   unsigned framePrepared = 0;
   struct FrameUniforms {
@@ -372,7 +391,10 @@ struct Renderer::Impl {
   }
 
   explicit Impl(const RenderSettings& s) : settings(s), ctx(s.width, s.height, targetFor(s)) {
-    if (ctx.target() == SceneTarget::PostProcess) fxaaProg = Program(kSkyVs, kFxaaFs, "FXAA");
+    if (ctx.target() == SceneTarget::PostProcess) {
+      fxaaEdgeProg = Program(kSkyVs, fxaaSource(true).c_str(), "FXAA edges");
+      fxaaProg = Program(kMidVs, fxaaSource(false).c_str(), "FXAA");
+    }
     depthProg = Program(kDepthVs, kDepthFs, "shadow depth");
     skyProg = Program(kSkyVs, kSkyFs, "sky");
     overlayProg = Program(kOverlayVs, kOverlayFs, "overlay");
@@ -815,13 +837,27 @@ struct Renderer::Impl {
     ctx.resolve();
     ctx.bindFinalTarget();
     if (ctx.target() == SceneTarget::PostProcess) {
-      use(fxaaProg);
-      fxaaProg.set("uScene", 0);
-      fxaaProg.set("uTexel", glm::vec2(1.0f / static_cast<float>(settings.width),
-                                       1.0f / static_cast<float>(settings.height)));
       glBindTexture(GL_TEXTURE_2D, ctx.sceneTexture());
       glBindVertexArray(emptyVao);
+      const glm::vec2 texel(1.0f / static_cast<float>(settings.width), 1.0f / static_cast<float>(settings.height));
+      // Every pixel's exact colour, and the edge pixels marked at depth 0 (the rest at 1).
+      glEnable(GL_DEPTH_TEST);
+      glDepthFunc(GL_ALWAYS);
+      glDepthMask(GL_TRUE);
+      use(fxaaEdgeProg);
+      fxaaEdgeProg.set("uScene", 0);
+      fxaaEdgeProg.set("uTexel", texel);
       glDrawArrays(GL_TRIANGLES, 0, 3);
+      // The blend, at depth 0.5: passes only over the marked pixels.
+      glDepthFunc(GL_GREATER);
+      glDepthMask(GL_FALSE);
+      use(fxaaProg);
+      fxaaProg.set("uScene", 0);
+      fxaaProg.set("uTexel", texel);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+      glDepthMask(GL_TRUE);
+      glDepthFunc(GL_LEQUAL);
+      glDisable(GL_DEPTH_TEST);
     }
     if (ctx.target() != SceneTarget::Plain) mark(RenderPass::AntiAlias);
 

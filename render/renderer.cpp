@@ -840,21 +840,21 @@ struct Renderer::Impl {
       glBindTexture(GL_TEXTURE_2D, ctx.sceneTexture());
       glBindVertexArray(emptyVao);
       const glm::vec2 texel(1.0f / static_cast<float>(settings.width), 1.0f / static_cast<float>(settings.height));
+      const auto fxaaPass = [&](Program& p) {
+        use(p);
+        p.set("uScene", 0);
+        p.set("uTexel", texel);
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+      };
       // Every pixel's exact colour, and the edge pixels marked at depth 0 (the rest at 1).
       glEnable(GL_DEPTH_TEST);
       glDepthFunc(GL_ALWAYS);
       glDepthMask(GL_TRUE);
-      use(fxaaEdgeProg);
-      fxaaEdgeProg.set("uScene", 0);
-      fxaaEdgeProg.set("uTexel", texel);
-      glDrawArrays(GL_TRIANGLES, 0, 3);
+      fxaaPass(fxaaEdgeProg);
       // The blend, at depth 0.5: passes only over the marked pixels.
       glDepthFunc(GL_GREATER);
       glDepthMask(GL_FALSE);
-      use(fxaaProg);
-      fxaaProg.set("uScene", 0);
-      fxaaProg.set("uTexel", texel);
-      glDrawArrays(GL_TRIANGLES, 0, 3);
+      fxaaPass(fxaaProg);
       glDepthMask(GL_TRUE);
       glDepthFunc(GL_LEQUAL);
       glDisable(GL_DEPTH_TEST);

@@ -291,10 +291,8 @@ void World::step() {
   const double dt = dt_, t = time_;
   Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data();
   // Contacts need the positions at the start of the step (xOld). The integrators that change
-  // x only in their last pass save it there; the others save it now.
-  const bool savedLate = integrator_ == Integrator::ExplicitEuler || integrator_ == Integrator::SymplecticEuler ||
-                         integrator_ == Integrator::RK4;
-  if (!model_.colliders.empty() && !savedLate) {
+  // x only in their last pass save it there (lastPass); the others save it now.
+  if (!model_.colliders.empty() && !savesOldInLastPass()) {
     Vec3* xOld = xOld_.data();
     forVertices([&](std::size_t begin, std::size_t end) { std::copy(x + begin, x + end, xOld + begin); });
   }
@@ -302,14 +300,14 @@ void World::step() {
   switch (integrator_) {
     case Integrator::ExplicitEuler:
       accelerations(x, v, t, a);
-      lastPass(true, [&](std::size_t i) {
+      lastPass([&](std::size_t i) {
         x[i] += v[i] * dt;
         v[i] += a[i] * dt;
       });
       break;
     case Integrator::SymplecticEuler:
       accelerations(x, v, t, a);
-      lastPass(true, [&](std::size_t i) {
+      lastPass([&](std::size_t i) {
         v[i] += a[i] * dt;
         x[i] += v[i] * dt;
       });
@@ -326,7 +324,7 @@ void World::step() {
       });
       accelerations(x, vs, t + dt, aNext);
       cachedAccelerationValid_ = true;  // unless a contact changes a velocity in the last pass
-      lastPass(false, [&](std::size_t i) {
+      lastPass([&](std::size_t i) {
         v[i] += (a[i] + aNext[i]) * (0.5 * dt);
         a[i] = aNext[i];
       });
@@ -347,7 +345,7 @@ void World::step() {
         }
       });
       accelerations(x, vs, t + dt, a);
-      lastPass(false, [&](std::size_t i) { v[i] += a[i] * (0.5 * dt); });  // kick
+      lastPass([&](std::size_t i) { v[i] += a[i] * (0.5 * dt); });  // kick
       break;
     }
     case Integrator::RK4: {
@@ -377,7 +375,7 @@ void World::step() {
       stageState(dt, k3x, k3v, nullptr);
       accelerations(xs, vs, t + dt, k4v);
       const double w = dt / 6.0;
-      lastPass(true, [&](std::size_t i) {
+      lastPass([&](std::size_t i) {
         // k4x = vs (the fourth stage's velocity).
         x[i] += (k1x[i] + (k2x[i] + k3x[i]) * 2.0 + vs[i]) * w;
         v[i] += (k1v[i] + (k2v[i] + k3v[i]) * 2.0 + k4v[i]) * w;
@@ -386,18 +384,23 @@ void World::step() {
     }
     case Integrator::BackwardEuler:
       implicit_->step(*this, x_, v_, t, dt);
-      if (!model_.colliders.empty()) lastPass(false, [](std::size_t) {});
+      if (!model_.colliders.empty()) lastPass([](std::size_t) {});
       break;
   }
   time_ = t + dt;
   ++steps_;
 }
 
+bool World::savesOldInLastPass() const {
+  return integrator_ == Integrator::ExplicitEuler || integrator_ == Integrator::SymplecticEuler ||
+         integrator_ == Integrator::RK4;
+}
+
 template <class Update>
-void World::lastPass(bool saveOld, Update&& update) {
+void World::lastPass(Update&& update) {
   // One fork-join: each thread saves, updates and resolves the contacts of its own vertices
   // (a vertex's contact reads only its own old and new state).
-  const bool contacts = !model_.colliders.empty();
+  const bool contacts = !model_.colliders.empty(), saveOld = savesOldInLastPass();
   std::atomic<bool> touched{false};
   Vec3 *x = x_.data(), *xOld = xOld_.data();
   forVertices([&](std::size_t begin, std::size_t end) {

@@ -112,10 +112,11 @@ class World {
   template <class F>
   void forVertices(F&& fn) const;
   // The step's last pass over the vertices, update(i) for each, with the contacts of the same
-  // vertices after it; saveOld first copies x to xOld (for integrators that change x only
-  // here). Marks the cached acceleration invalid when a contact changed a velocity.
+  // vertices after it; for the integrators that change x only here it first copies x to xOld.
+  // Marks the cached acceleration invalid when a contact changed a velocity.
   template <class Update>
-  void lastPass(bool saveOld, Update&& update);
+  void lastPass(Update&& update);
+  bool savesOldInLastPass() const;
   // Resolves the contacts of vertices [begin, end) along their paths xOld -> x; true if any
   // vertex touched a collider or a damping layer.
   bool collide(std::size_t begin, std::size_t end);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 // strutPacket returns 32-byte vectors through inlined helpers local to this file; GCC's note
 // that such calls have another ABI with and without AVX concerns no caller.
@@ -26,56 +27,105 @@ inline bool strutForce(const Strut& st, const Vec3* x, const Vec3* v, Vec3& fi) 
 // Four struts at once, one per lane of a vector of four doubles (GCC's vector extension, as
 // the hinge packet in hinge.cpp): strutForce's operations in the same order, never fused
 // (-ffp-contract=off), so each strut's force is bit-identical to strutForce's. The gain is
-// the square root and the division, which the scalar kernel waits on one strut at a time.
+// the square root and the division, which the scalar kernel waits on one strut at a time, and
+// fewer loads: a vertex's x and y move as one 16-byte pair, and so do a strut's rest length
+// and stiffness (a strut reads 16 values and writes 6; one load at a time it was 23 and 6).
 typedef double Lanes __attribute__((vector_size(32)));
+typedef double Pair __attribute__((vector_size(16)));
 
-inline void strutPacket(const Strut* const s[4], const Vec3* x, const Vec3* v, Vec3 fi[4], bool ok[4]) {
-  Lanes dx, dy, dz, wx, wy, wz, k, d, l0;
-  for (int l = 0; l < 4; ++l) {
-    const Strut& st = *s[l];
-    const Vec3 xij = x[st.j] - x[st.i], vij = v[st.j] - v[st.i];
-    dx[l] = xij.x, dy[l] = xij.y, dz[l] = xij.z;
-    wx[l] = vij.x, wy[l] = vij.y, wz[l] = vij.z;
-    k[l] = st.stiffness, d[l] = st.damping, l0[l] = st.restLength;
+inline Pair loadPair(const double* p) {
+  Pair r;
+  std::memcpy(&r, p, sizeof r);
+  return r;
+}
+
+// Lanes hold the struts in the order 0, 2, 1, 3: the order in which the in-lane unpacks below
+// turn four (x, y) pairs into an x vector and a y vector, and back.
+inline void transpose(Pair p0, Pair p1, Pair p2, Pair p3, Lanes& first, Lanes& second) {
+  const Lanes lo = __builtin_shufflevector(p0, p1, 0, 1, 2, 3), hi = __builtin_shufflevector(p2, p3, 0, 1, 2, 3);
+  first = __builtin_shufflevector(lo, hi, 0, 4, 2, 6);
+  second = __builtin_shufflevector(lo, hi, 1, 5, 3, 7);
+}
+
+struct PacketForce {
+  Pair xy[4];     // strut r's (fx, fy)
+  double z[4];    // strut r's fz
+  unsigned ok;    // bit r: strut r has a direction (its ends do not coincide)
+};
+
+__attribute__((always_inline)) inline void strutPacket(const Strut* const s[4], const Vec3* x, const Vec3* v, PacketForce& out) {
+  Pair dxy[4], wxy[4], lk[4];
+  double dz[4], wz[4], d[4];
+  for (int r = 0; r < 4; ++r) {
+    const Strut& st = *s[r];
+    dxy[r] = loadPair(&x[st.j].x) - loadPair(&x[st.i].x);
+    wxy[r] = loadPair(&v[st.j].x) - loadPair(&v[st.i].x);
+    dz[r] = x[st.j].z - x[st.i].z;
+    wz[r] = v[st.j].z - v[st.i].z;
+    lk[r] = loadPair(&st.restLength);  // (restLength, stiffness)
+    d[r] = st.damping;
   }
-  const Lanes ll = dx * dx + dy * dy + dz * dz;
+  Lanes dx, dy, wx, wy, l0, k;
+  transpose(dxy[0], dxy[1], dxy[2], dxy[3], dx, dy);
+  transpose(wxy[0], wxy[1], wxy[2], wxy[3], wx, wy);
+  transpose(lk[0], lk[1], lk[2], lk[3], l0, k);
+  const Lanes dzl = {dz[0], dz[2], dz[1], dz[3]}, wzl = {wz[0], wz[2], wz[1], wz[3]};
+  const Lanes dl = {d[0], d[2], d[1], d[3]};
+  const Lanes ll = dx * dx + dy * dy + dzl * dzl;
   Lanes len;
   for (int l = 0; l < 4; ++l) len[l] = std::sqrt(ll[l]);  // one vsqrtpd with AVX
   const Lanes inv = 1.0 / len;
-  const Lanes ux = dx * inv, uy = dy * inv, uz = dz * inv;
-  const Lanes scale = k * (len - l0) + d * (wx * ux + wy * uy + wz * uz);
+  const Lanes ux = dx * inv, uy = dy * inv, uz = dzl * inv;
+  const Lanes scale = k * (len - l0) + dl * (wx * ux + wy * uy + wzl * uz);
   const Lanes fx = ux * scale, fy = uy * scale, fz = uz * scale;
-  for (int l = 0; l < 4; ++l) {
-    ok[l] = len[l] > 0.0;
-    fi[l] = Vec3{fx[l], fy[l], fz[l]};
-  }
+  // Back to struts: unpacking (fx, fy) gives the pairs of lanes 0 and 2 (struts 0 and 1), and of
+  // lanes 1 and 3 (struts 2 and 3).
+  const Lanes even = __builtin_shufflevector(fx, fy, 0, 4, 2, 6), odd = __builtin_shufflevector(fx, fy, 1, 5, 3, 7);
+  out.xy[0] = __builtin_shufflevector(even, even, 0, 1);
+  out.xy[1] = __builtin_shufflevector(even, even, 2, 3);
+  out.xy[2] = __builtin_shufflevector(odd, odd, 0, 1);
+  out.xy[3] = __builtin_shufflevector(odd, odd, 2, 3);
+  out.z[0] = fz[0], out.z[1] = fz[2], out.z[2] = fz[1], out.z[3] = fz[3];
+  out.ok = (len[0] > 0.0 ? 1u : 0u) | (len[2] > 0.0 ? 2u : 0u) | (len[1] > 0.0 ? 4u : 0u) | (len[3] > 0.0 ? 8u : 0u);
+}
+
+// f[i] += (xy, z) or -= it, the pair as one 16-byte operation (the same sums as per component).
+inline void addTo(Vec3& f, Pair xy, double z) {
+  Pair sum = loadPair(&f.x) + xy;
+  std::memcpy(&f.x, &sum, sizeof sum);
+  f.z += z;
+}
+inline void subtractFrom(Vec3& f, Pair xy, double z) {
+  Pair difference = loadPair(&f.x) - xy;
+  std::memcpy(&f.x, &difference, sizeof difference);
+  f.z -= z;
 }
 
 // Adds the forces of count struts, the r-th being struts[indexOf(r)], to the ends whose bit is
 // set in maskOf(r) (bit 0: i, bit 1: j): four at a time, the rest one at a time, always summed
 // in list order.
 template <class IndexOf, class MaskOf>
-inline void applyStrutList(const Strut* struts, std::size_t count, IndexOf indexOf, MaskOf maskOf, const Vec3* x,
+__attribute__((always_inline)) inline void applyStrutList(const Strut* struts, std::size_t count, IndexOf indexOf, MaskOf maskOf, const Vec3* x,
                            const Vec3* v, Vec3* f) {
-  const auto add = [&](std::size_t r, const Vec3& fi) {
+  const auto add = [&](std::size_t r, Pair xy, double z) {
     const Strut& st = struts[indexOf(r)];
     const uint32_t mask = maskOf(r);
-    if (mask & 1u) f[st.i] += fi;
-    if (mask & 2u) f[st.j] -= fi;
+    if (mask & 1u) addTo(f[st.i], xy, z);
+    if (mask & 2u) subtractFrom(f[st.j], xy, z);
   };
-  Vec3 fi[4];
-  bool ok[4];
+  PacketForce packet;
   std::size_t r = 0;
   for (; r + 4 <= count; r += 4) {
     const Strut* s[4] = {&struts[indexOf(r)], &struts[indexOf(r + 1)], &struts[indexOf(r + 2)],
                          &struts[indexOf(r + 3)]};
-    strutPacket(s, x, v, fi, ok);
+    strutPacket(s, x, v, packet);
     for (std::size_t l = 0; l < 4; ++l) {
-      if (ok[l]) add(r + l, fi[l]);
+      if (packet.ok & (1u << l)) add(r + l, packet.xy[l], packet.z[l]);
     }
   }
+  Vec3 fi;
   for (; r < count; ++r) {
-    if (strutForce(struts[indexOf(r)], x, v, fi[0])) add(r, fi[0]);
+    if (strutForce(struts[indexOf(r)], x, v, fi)) add(r, Pair{fi.x, fi.y}, fi.z);
   }
 }
 

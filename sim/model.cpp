@@ -25,31 +25,22 @@ struct DirectedEdge {
   }
 };
 
-// Morton code of a point quantised to 2^10 cells per axis of the box [lo, lo + extent].
-uint32_t mortonCode(const Vec3& p, const Vec3& lo, const Vec3& extent) {
-  auto spread = [](uint32_t v) {  // 10 bits -> every third of 30
-    v = (v | (v << 16)) & 0x030000FFu;
-    v = (v | (v << 8)) & 0x0300F00Fu;
-    v = (v | (v << 4)) & 0x030C30C3u;
-    v = (v | (v << 2)) & 0x09249249u;
-    return v;
-  };
-  auto cell = [](double x, double from, double width) {
-    const double t = width > 0.0 ? (x - from) / width : 0.0;
-    return static_cast<uint32_t>(std::clamp(t * 1024.0, 0.0, 1023.0));
-  };
-  return spread(cell(p.x, lo.x, extent.x)) | (spread(cell(p.y, lo.y, extent.y)) << 1) |
-         (spread(cell(p.z, lo.z, extent.z)) << 2);
-}
-
-// Renumbers the vertices of the body just appended (info) in Morton order of their rest
-// positions (ties by mesh index, so the order is a pure function of the mesh), and sorts its
-// struts, hinges and faces by their first vertex, so the force loops stream through memory.
+// Renumbers the vertices of the body just appended (info) in order of their rest position along
+// the longest side of the body's bounding box (ties by mesh index, so the order is a pure
+// function of the mesh), and sorts its struts, hinges and faces by their first vertex, so the
+// force loops stream through memory. Any contiguous index range is then a slab of the body cut
+// by planes: few elements straddle two ranges, and the vertices a range's elements reach on the
+// other side of a cut are a short run of consecutive indices, a few cache lines. (A Morton
+// order also cuts few elements, but scatters the reached vertices over the whole of the other
+// range, one cache line each; on two threads each line is a transfer between the cores every
+// step: the gas ball's two-thread step took 73 us that way and 57 us in slabs, docs/benchmarks.md.)
 void orderSpatially(Model& model, BodyInfo& info) {
   const uint32_t base = info.firstVertex, nv = info.vertexCount;
   const Bounds box = boundsOf(std::vector<Vec3>(model.restPosition.begin() + base, model.restPosition.end()));
-  std::vector<std::pair<uint32_t, uint32_t>> keys(nv);  // (code, mesh index)
-  for (uint32_t k = 0; k < nv; ++k) keys[k] = {mortonCode(model.restPosition[base + k], box.lo, box.size()), k};
+  const Vec3 size = box.size();
+  const int axis = size.x >= size.y && size.x >= size.z ? 0 : (size.y >= size.z ? 1 : 2);
+  std::vector<std::pair<double, uint32_t>> keys(nv);  // (coordinate along the axis, mesh index)
+  for (uint32_t k = 0; k < nv; ++k) keys[k] = {model.restPosition[base + k][axis], k};
   std::sort(keys.begin(), keys.end());
   info.modelVertex.assign(nv, 0);
   for (uint32_t r = 0; r < nv; ++r) info.modelVertex[keys[r].second] = base + r;

@@ -78,9 +78,9 @@ struct BodyInfo {
   // Enclosed isothermal ideal gas at the ambient pressure p0 when the volume is restVolume: its
   // pressure over the ambient is p0 (V0 / V - 1). 0: the body holds no gas. [Pa]
   double gasPressure = 0.0;
-  // The model's vertices are the mesh's in spatial (Morton) order, so that vertices near in
-  // space are near in memory and a contiguous index range is a compact piece of the body (what
-  // one thread owns). modelVertex[k] is the global model index of the mesh's vertex k; messages
+  // The model's vertices are the mesh's in order along the body's longest side, so that
+  // vertices near in space are near in memory and a contiguous index range is a slab of the
+  // body (what one thread owns). modelVertex[k] is the global model index of the mesh's vertex k; messages
   // and scene keys (pins) speak of mesh indices.
   std::vector<uint32_t> modelVertex;
 };

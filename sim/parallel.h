@@ -6,7 +6,8 @@
 // order, exactly as the one-threaded loop does. Threads get it by owning vertices, not
 // elements (the "owner computes" rule):
 //   - the vertices are split into one contiguous index range per thread; addBody numbers each
-//     body's vertices in spatial (Morton) order, so a range is a compact region and each
+//     body's vertices in slabs along its longest side, so a range is a compact region, the
+//     vertices its elements reach in the next range are a short run of indices, and each
 //     thread writes its own stretch of memory;
 //   - each thread walks, in index order, the elements that touch a vertex it owns, and adds an
 //     element's force only to the vertices it owns (ElementRef::mask); an element across a range

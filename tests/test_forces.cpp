@@ -300,8 +300,8 @@ namespace springy {
 namespace {
 
 TEST(Model, VerticesAreRenumberedInSpatialOrderKeepingTheMesh) {
-  // addBody numbers a body's vertices in Morton order; the model must still be the mesh's:
-  // the same positions, faces with the same orientation, one strut per mesh edge.
+  // addBody numbers a body's vertices in slabs along its longest side; the model must still be
+  // the mesh's: the same positions, faces with the same orientation, one strut per mesh edge.
   const TriMesh mesh = makeIcosphere(1.0, 5);  // 10242 vertices
   Model model;
   BodyDesc desc;
@@ -361,6 +361,24 @@ TEST(Model, VerticesAreRenumberedInSpatialOrderKeepingTheMesh) {
   const double meshCut = cut([&](uint32_t i) { return toMesh[i]; });
   EXPECT_LT(spatialCut, 0.02 * static_cast<double>(edges.size()));
   EXPECT_LT(spatialCut, 0.1 * meshCut);
+
+  // Slabs: wherever the index range is cut (here for 2, 3 and 4 threads), the vertices the
+  // edges reach across the cut are a short run of indices next to it, not spread over the
+  // other range: a thread reads a few cache lines of its neighbour's vertices, not one line per
+  // vertex. For this ball a run is about two rings of vertices (~300 of 10242).
+  for (const std::size_t parts : {2u, 3u, 4u}) {
+    for (std::size_t p = 1; p < parts; ++p) {
+      const uint32_t s = static_cast<uint32_t>(n * p / parts);
+      uint32_t first = s, last = s;  // the reached vertices span [first, last]
+      for (const auto& [a, b] : edges) {
+        if ((a < s) == (b < s)) continue;
+        first = std::min(first, std::min(a, b));
+        last = std::max(last, std::max(a, b));
+      }
+      EXPECT_LT(static_cast<double>(last - first), 0.06 * static_cast<double>(n))
+          << parts << " parts, cut at " << s << ": reached vertices " << first << " to " << last;
+    }
+  }
 }
 
 }  // namespace

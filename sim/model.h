@@ -80,8 +80,8 @@ struct BodyInfo {
   double gasPressure = 0.0;
   // The model's vertices are the mesh's in order along the body's longest side, so that
   // vertices near in space are near in memory and a contiguous index range is a slab of the
-  // body (what one thread owns). modelVertex[k] is the global model index of the mesh's vertex k; messages
-  // and scene keys (pins) speak of mesh indices.
+  // body (what one thread owns). modelVertex[k] is the global model index of the mesh's vertex
+  // k; messages and scene keys (pins) speak of mesh indices.
   std::vector<uint32_t> modelVertex;
 };
 

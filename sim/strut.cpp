@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 // strutPacket returns 32-byte vectors through inlined helpers local to this file; GCC's note
@@ -32,6 +33,9 @@ inline bool strutForce(const Strut& st, const Vec3* x, const Vec3* v, Vec3& fi) 
 // and stiffness (a strut reads 16 values and writes 6; one load at a time it was 23 and 6).
 typedef double Lanes __attribute__((vector_size(32)));
 typedef double Pair __attribute__((vector_size(16)));
+static_assert(offsetof(Vec3, y) == offsetof(Vec3, x) + sizeof(double), "a Vec3's x and y load as one pair");
+static_assert(offsetof(Strut, stiffness) == offsetof(Strut, restLength) + sizeof(double),
+              "a strut's rest length and stiffness load as one pair");
 
 inline Pair loadPair(const double* p) {
   Pair r;
@@ -53,7 +57,8 @@ struct PacketForce {
   unsigned ok;    // bit r: strut r has a direction (its ends do not coincide)
 };
 
-__attribute__((always_inline)) inline void strutPacket(const Strut* const s[4], const Vec3* x, const Vec3* v, PacketForce& out) {
+__attribute__((always_inline)) inline void strutPacket(const Strut* const s[4], const Vec3* x, const Vec3* v,
+                                                       PacketForce& out) {
   Pair dxy[4], wxy[4], lk[4];
   double dz[4], wz[4], d[4];
   for (int r = 0; r < 4; ++r) {
@@ -103,10 +108,11 @@ inline void subtractFrom(Vec3& f, Pair xy, double z) {
 
 // Adds the forces of count struts, the r-th being struts[indexOf(r)], to the ends whose bit is
 // set in maskOf(r) (bit 0: i, bit 1: j): four at a time, the rest one at a time, always summed
-// in list order.
+// in list order. Always inlined: otherwise GCC compiles it once, for the baseline target, and
+// both target_clones below call that copy (three times slower than the AVX2 one).
 template <class IndexOf, class MaskOf>
-__attribute__((always_inline)) inline void applyStrutList(const Strut* struts, std::size_t count, IndexOf indexOf, MaskOf maskOf, const Vec3* x,
-                           const Vec3* v, Vec3* f) {
+__attribute__((always_inline)) inline void applyStrutList(const Strut* struts, std::size_t count, IndexOf indexOf,
+                                                          MaskOf maskOf, const Vec3* x, const Vec3* v, Vec3* f) {
   const auto add = [&](std::size_t r, Pair xy, double z) {
     const Strut& st = struts[indexOf(r)];
     const uint32_t mask = maskOf(r);

@@ -35,9 +35,9 @@ void applyWindPressureOwned(const Model& model, const ElementRef* list, std::siz
 // N / 6 = (x1 - x0) x (x2 - x0) / 6 (a third of its area vector) to each of its corners. The
 // volume pass computes each face's N once: its term is x0 . N (the same triple product), and it
 // keeps N for the force pass at the same positions, where each vertex sums its faces' N. That
-// force is
-// -dE/dx of the gas's energy E = p0 V0 (V / V0 - 1 - ln(V / V0)) (the work the gas and the
-// ambient do on the body), whose second derivative at V0 is p0 / V0: the breathing stiffness.
+// force is -dE/dx of the gas's energy E = p0 V0 (V / V0 - 1 - ln(V / V0)) (the work the gas
+// and the ambient do on the body), whose second derivative at V0 is p0 / V0: the breathing
+// stiffness.
 
 // Volume enclosed by a body's faces at positions x (about its first vertex, which keeps the
 // terms small and makes the sum independent of where the body is). The faces are summed in

@@ -9,6 +9,7 @@
 
 #include "app/atomic_file.h"
 #include "app/commands.h"
+#include "app/progress.h"
 #include "app/runner.h"
 #include "sim/implicit.h"
 #include "sim/error.h"
@@ -74,12 +75,15 @@ int runCheck(const CheckOptions& options) {
     // At rest at the end (RestWatch): the frames of the last second.
     const double watchFrom = scene.duration - RestWatch::kWindow;
     RestWatch rest;
+    // A long run shows that it is alive (stderr: a bar on a terminal, a line every 5 s in a log).
+    Progress progress(path, frames);
     for (long k = 1; k <= frames && !failure; ++k) {
       if (interrupted()) {
         std::cerr << "springy check: interrupted\n";
         return 130;
       }
       failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
+      progress.update(k, std::to_string(world.stepCount()) + " steps");
       if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
       if (trace.is_open()) {
         for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
@@ -87,6 +91,7 @@ int runCheck(const CheckOptions& options) {
         }
       }
     }
+    progress.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
     std::printf("  %-16s %9s %8s %8s %10s %10s %9s %10s %10s %10s %10s %s\n", "body", "steps", "sim[s]", "wall[s]",
                 "max strain", "max pen[m]", "vol min", "vol end", "kinetic", "grav", "elastic", "rest");

@@ -5,8 +5,24 @@
 #include "app/atomic_file.h"
 #include "app/commands.h"
 #include "sim/error.h"
+#include "sim/limits.h"
 
 namespace {
+
+// A fraction in [0, 1]; CLI::Range lets NaN through (every comparison with it is false).
+const CLI::Validator kFraction(
+    [](const std::string& text) -> std::string {
+      double value = 0.0;
+      try {
+        std::size_t used = 0;
+        value = std::stod(text, &used);
+        if (used != text.size()) return "expected a number in [0, 1], got '" + text + "'";
+      } catch (const std::exception&) {
+        return "expected a number in [0, 1], got '" + text + "'";
+      }
+      return value >= 0.0 && value <= 1.0 ? std::string() : "expected a number in [0, 1], got '" + text + "'";
+    },
+    "FRACTION in [0, 1]");
 
 void addRunOverrides(CLI::App* cmd, springy::RunOverrides& o) {
   cmd->add_option("--integrator", o.integrator, "Override the scene's integrator: " + springy::integratorNames());
@@ -25,8 +41,10 @@ void addRunOverrides(CLI::App* cmd, springy::RunOverrides& o) {
         } catch (const std::exception&) {
           used = 0;
         }
-        if (used == 0 || used != text.size()) {
-          throw CLI::ValidationError("--substeps", "expected a whole number or 'auto', got '" + text + "'");
+        if (used == 0 || used != text.size() || n < 1 || n > springy::kMaxSubsteps) {
+          throw CLI::ValidationError("--substeps", "expected a whole number from 1 to " +
+                                                       std::to_string(springy::kMaxSubsteps) + " or 'auto', got '" +
+                                                       text + "'");
         }
         o.substeps = n;
       },
@@ -63,9 +81,9 @@ int main(int argc, char** argv) {
   addRunOverrides(checkCmd, check.overrides);
   checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV");
   checkCmd->add_option("--min-volume", check.minVolume, "Fail if a body's volume falls below this fraction of rest")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(kFraction);
   checkCmd->add_option("--end-volume", check.endVolume, "Fail if a body ends below this fraction of its rest volume")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(kFraction);
   checkCmd->add_flag("--end-at-rest", check.endAtRest,
                      "Fail unless every body is at rest: over the last second no vertex moves more than 0.2% of "
                      "its body's size");
@@ -80,9 +98,12 @@ int main(int argc, char** argv) {
   CLI::App* studyCmd = app.add_subcommand("study", "Work-precision (accuracy) or stability study of the integrators");
   studyCmd->add_option("kind", study.kind, "accuracy or stability")->required()->check(CLI::IsMember({"accuracy", "stability"}));
   studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")->capture_default_str();
-  studyCmd->add_option("--scenes", study.scenes, "Showcase scenes for the accuracy study (default: scenes/*.toml)");
+  studyCmd->add_option("--scenes", study.scenes, "Showcase scenes for the accuracy study (default: scenes/*.toml)")
+      ->check(CLI::ExistingFile);
   studyCmd->add_flag("--quick", study.quick, "Small cases and few repeats (seconds; for tests and CI)");
-  studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")->capture_default_str();
+  studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
 
 #ifdef SPRINGY_HAVE_RENDER
   springy::RenderOptions render;
@@ -106,8 +127,12 @@ int main(int argc, char** argv) {
   addRenderOverrides(framesCmd, frames.render);
 #endif
 
-  CLI11_PARSE(app, argc, argv);
   springy::installInterruptHandler();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
   try {
     if (checkCmd->parsed()) return springy::runCheck(check);
     if (suggestCmd->parsed()) return springy::runSuggest(suggest);
@@ -118,6 +143,14 @@ int main(int argc, char** argv) {
 #endif
   } catch (const springy::Error& e) {
     std::cerr << "springy: " << e.what() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "springy: out of memory (the scene or its meshes are too large for this machine)\n";
+    return 1;
+  } catch (const std::exception& e) {
+    // Not a user error springy foresaw (those are springy::Error): still a message and a clean
+    // exit, never std::terminate's abort, so that temporary outputs are removed.
+    std::cerr << "springy: unexpected error: " << e.what() << "\n";
     return 1;
   }
   return 0;

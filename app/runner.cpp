@@ -1,9 +1,12 @@
 #include "app/runner.h"
 
+#include <cmath>
 #include <iostream>
 
+#include "app/atomic_file.h"
 #include "app/commands.h"
 #include "sim/error.h"
+#include "sim/limits.h"
 #include "sim/parallel.h"
 
 namespace springy {
@@ -14,18 +17,25 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     throw Error("--integrator: '" + *overrides.integrator + "' is not one of: " + integratorNames());
   }
   if (overrides.dt) {
-    if (!(*overrides.dt > 0.0)) throw Error("--dt must be positive");
+    if (!(*overrides.dt > 0.0) || !std::isfinite(*overrides.dt)) throw Error("--dt must be a positive finite number of seconds");
     scene.dt = *overrides.dt;
   }
   if (overrides.duration) {
-    if (!(*overrides.duration > 0.0)) throw Error("--duration must be positive");
+    if (!(*overrides.duration > 0.0) || !std::isfinite(*overrides.duration)) {
+      throw Error("--duration must be a positive finite number of seconds");
+    }
     scene.duration = *overrides.duration;
   }
   if (overrides.substeps) {
-    if (*overrides.substeps < 1) throw Error("--substeps must be at least 1");
+    if (*overrides.substeps < 1 || *overrides.substeps > kMaxSubsteps) {
+      throw Error("--substeps must be between 1 and " + std::to_string(kMaxSubsteps) + " (or auto)");
+    }
     scene.substeps = *overrides.substeps;
   }
   if (advise) adviseTimeStep(path, scene, overrides.autoSubsteps, std::cerr);
+  if (auto problem = runSettingsProblem(scene)) {
+    throw Error(path + ": with the command line's settings, " + *problem);
+  }
   return scene;
 }
 
@@ -36,7 +46,11 @@ World makeWorld(const SceneDesc& scene, const RunOverrides& overrides) {
 }
 
 std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time) {
-  while (world.time() < time - 0.5 * world.dt()) world.step();
+  while (world.time() < time - 0.5 * world.dt()) {
+    // Polled every step, so that a long frame (a fine step, a large model) stops at once.
+    if (interrupted()) return std::nullopt;
+    world.step();
+  }
   return monitor.check(world);
 }
 

@@ -29,7 +29,8 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides);
 
 // Steps `world` until `time` (within half a step), checking the monitor after the last step.
-// Returns the failure, if any.
+// Returns the failure, if any. Stops early, with nothing to report, when interrupted() (a
+// signal): the caller sees the flag and stops.
 std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time);
 
 }  // namespace springy

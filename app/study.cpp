@@ -282,9 +282,20 @@ double measuredOrder(const std::vector<Point>& points, const std::string& name, 
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
+// The study's output directory, created when missing. Throws springy::Error naming it (an existing
+// file of that name, no permission) instead of std::filesystem's uncaught exception.
+void makeOutputDirectory(const fs::path& out) {
+  std::error_code error;
+  if (fs::exists(out, error) && !fs::is_directory(out, error)) {
+    throw Error(out.string() + ": exists and is not a directory; -o names the study's output directory");
+  }
+  fs::create_directories(out, error);
+  if (error) throw Error(out.string() + ": cannot create the output directory: " + error.message());
+}
+
 int runAccuracy(const StudyOptions& o) {
   const fs::path out = o.output;
-  fs::create_directories(out);
+  makeOutputDirectory(out);
   std::vector<AccuracyCase> cases;
   cases.push_back(strutAccuracy(0.5));
   cases.push_back(hingeAccuracy());
@@ -464,7 +475,7 @@ int runAccuracy(const StudyOptions& o) {
 
 int runStability(const StudyOptions& o) {
   const fs::path out = o.output;
-  fs::create_directories(out);
+  makeOutputDirectory(out);
   const double horizon = o.quick ? 0.05 : 0.2;
   const int iterations = o.quick ? 4 : 8;
   std::ostringstream csv, md;

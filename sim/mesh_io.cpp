@@ -9,13 +9,16 @@
 #include <assimp/Importer.hpp>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <initializer_list>
+#include <sstream>
 #include <numeric>
 #include <tuple>
 #include <utility>
 #include <vector>
 
 #include "sim/error.h"
+#include "sim/limits.h"
 
 namespace springy {
 
@@ -28,6 +31,10 @@ constexpr double kZeroAreaFactor = 1e-12;
 
 // Same idea for loadClosedMesh's enclosed-volume test, relative to diagonal^3.
 constexpr double kZeroVolumeFactor = 1e-12;
+
+// An edge this many times longer than the median edge makes a mesh unusable as a body: welding
+// and the zero-area test are relative to the bounding box, which the stray vertex sets.
+constexpr double kStrayEdgeRatio = 1e6;
 
 // Built by appending: `"(" + std::to_string(...)` trips GCC 12's false -Wrestrict (PR 105329).
 std::string listText(std::initializer_list<uint32_t> values) {
@@ -81,6 +88,12 @@ class MinUnionFind {
 // (negative determinant) reverses the winding, so its triangles get two corners swapped to keep
 // the file's intended orientation.
 void appendMesh(const aiMesh& mesh, const aiMatrix4x4& t, TriMesh& out) {
+  // Nodes may instance one mesh many times: the total is what memory follows.
+  if (out.positions.size() + mesh.mNumVertices > kMaxMeshVertices ||
+      out.triangles.size() + mesh.mNumFaces > kMaxMeshTriangles) {
+    throw Error("its meshes and their instances add up to more than " + std::to_string(kMaxMeshVertices) +
+                " vertices or " + std::to_string(kMaxMeshTriangles) + " triangles (the limits)");
+  }
   const bool mirrored = t.Determinant() < 0.0f;
   const auto base = static_cast<uint32_t>(out.positions.size());
   for (unsigned int v = 0; v < mesh.mNumVertices; ++v) {
@@ -102,7 +115,9 @@ void appendMesh(const aiMesh& mesh, const aiMatrix4x4& t, TriMesh& out) {
 
 // Appends every mesh instance below `node`, each with its accumulated node transform.
 void collectNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parentTransform,
-                 std::vector<bool>& meshSeen, TriMesh& out) {
+                 std::vector<bool>& meshSeen, TriMesh& out, int depth = 0) {
+  constexpr int kMaxDepth = 1000;  // a deeper node tree is corrupt, and would exhaust the stack
+  if (depth > kMaxDepth) throw Error("its node tree is more than " + std::to_string(kMaxDepth) + " levels deep");
   const aiMatrix4x4 transform = parentTransform * node.mTransformation;
   for (unsigned int m = 0; m < node.mNumMeshes; ++m) {
     const unsigned int meshIndex = node.mMeshes[m];
@@ -111,7 +126,7 @@ void collectNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& pa
     appendMesh(*scene.mMeshes[meshIndex], transform, out);
   }
   for (unsigned int c = 0; c < node.mNumChildren; ++c) {
-    collectNode(scene, *node.mChildren[c], transform, meshSeen, out);
+    collectNode(scene, *node.mChildren[c], transform, meshSeen, out, depth + 1);
   }
 }
 
@@ -134,24 +149,148 @@ struct HalfEdge {
   uint32_t triangle;
 };
 
+// A PLY header declares its element counts up front, and assimp allocates for them before it
+// reads the body: a 200-byte file claiming 2e9 vertices took all memory. Each element needs at
+// least a known number of bytes (binary: the sizes of its scalar properties and list counts;
+// ASCII: a digit and a separator per property), so the counts the file can hold follow from
+// its size. Returns nothing to say for a file that is not PLY or whose header assimp will
+// reject anyway.
+void checkPlyCounts(const std::string& path, std::uintmax_t fileSize) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return;
+  bool ascii = true;
+  std::uintmax_t needed = 0;  // bytes the declared elements need at the least
+  std::uint64_t elements = 0;  // all elements declared: ASCII has one line each
+  std::string element;
+  std::uint64_t count = 0, elementBytes = 0;
+  auto closeElement = [&] {
+    if (element.empty()) return;
+    const std::uint64_t limit = element == "face" ? kMaxMeshTriangles : kMaxMeshVertices;
+    if (count > limit) {
+      throw Error(path + ": the PLY header declares " + std::to_string(count) + " " + element +
+                  " elements, more than the limit of " + std::to_string(limit));
+    }
+    needed += count * std::max<std::uint64_t>(elementBytes, 1);
+    elements += count;
+  };
+  auto typeBytes = [](const std::string& type) -> std::uint64_t {
+    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+    if (type == "double" || type == "float64") return 8;
+    return 4;
+  };
+  std::uintmax_t headerBytes = line.size() + 1;
+  for (int headerLines = 0; headerLines < 10000 && std::getline(in, line); ++headerLines) {
+    headerBytes += line.size() + 1;
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "format") {
+      std::string format;
+      words >> format;
+      ascii = format == "ascii";
+    } else if (keyword == "element") {
+      closeElement();
+      words >> element >> count;
+      if (!words) return;  // malformed: assimp reports it
+      elementBytes = 0;
+    } else if (keyword == "property" && !element.empty()) {
+      std::string type;
+      words >> type;
+      if (type == "list") {
+        std::string countType;
+        words >> countType;
+        elementBytes += ascii ? 2 : typeBytes(countType);
+      } else {
+        elementBytes += ascii ? 2 : typeBytes(type);
+      }
+    } else if (keyword == "end_header") {
+      closeElement();
+      const std::uintmax_t body = fileSize > headerBytes ? fileSize - headerBytes : 0;
+      // ASCII: the last value of the file may lack its separator.
+      if (needed > body + 1) {
+        throw Error(path + ": the PLY header declares elements that need at least " + std::to_string(needed) +
+                    " bytes, but the file has only " + std::to_string(body) +
+                    " after its header: the file is truncated or its header is wrong");
+      }
+      if (ascii) {
+        // assimp's ASCII reader fills elements missing at a cut with zeros; count the lines.
+        std::uint64_t lines = 0;
+        while (lines < elements && std::getline(in, line)) {
+          if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
+        }
+        if (lines < elements) {
+          throw Error(path + ": the PLY header declares " + std::to_string(elements) + " elements (one line each), but " +
+                      "the file has only " + std::to_string(lines) + " lines after its header: the file is truncated");
+        }
+      }
+      return;
+    }
+  }
+}
+
+// Assimp post-processes what its importers produced without checking it first: a truncated file
+// left faces with indices past the vertex array, and triangulating them crashed (SIGSEGV, or an
+// assertion in TriangulateProcess). So the file is read with validation only, every face checked
+// here, and triangulation applied afterwards.
+void checkFaces(const aiScene& scene, const std::string& path) {
+  for (unsigned int m = 0; m < scene.mNumMeshes; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    if (mesh.mNumVertices > kMaxMeshVertices || mesh.mNumFaces > kMaxMeshTriangles) {
+      throw Error(path + ": mesh " + std::to_string(m) + " has " + std::to_string(mesh.mNumVertices) +
+                  " vertices and " + std::to_string(mesh.mNumFaces) + " faces, more than the limits of " +
+                  std::to_string(kMaxMeshVertices) + " and " + std::to_string(kMaxMeshTriangles));
+    }
+    if (mesh.mNumFaces > 0 && (mesh.mFaces == nullptr || mesh.mVertices == nullptr)) {
+      throw Error(path + ": mesh " + std::to_string(m) + " has faces but no vertex data: the file is corrupt");
+    }
+    for (unsigned int f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices == 0 || face.mIndices == nullptr) {
+        throw Error(path + ": face " + std::to_string(f) + " has no corners: the file is truncated or corrupt");
+      }
+      for (unsigned int k = 0; k < face.mNumIndices; ++k) {
+        if (face.mIndices[k] >= mesh.mNumVertices) {
+          throw Error(path + ": face " + std::to_string(f) + " refers to vertex " + std::to_string(face.mIndices[k]) +
+                      ", but the file has only " + std::to_string(mesh.mNumVertices) +
+                      " vertices: the file is truncated or corrupt");
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 
 TriMesh readMeshFile(const std::string& path) {
+  const std::uintmax_t fileSize = checkInputFile(path, kMaxMeshFileBytes, "mesh file");
+  checkPlyCounts(path, fileSize);
   Assimp::Importer importer;
-  // Triangulate only: welding is done by weldVertices, deterministically and with our tolerance.
-  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate);
+  // Validation, then (after our own checks) triangulation only: welding is done by
+  // weldVertices, deterministically and with our tolerance.
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  if (scene == nullptr) {
+    throw Error(path + ": cannot read mesh file: " + importer.GetErrorString());
+  }
+  checkFaces(*scene, path);
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate);
   if (scene == nullptr) {
     throw Error(path + ": cannot read mesh file: " + importer.GetErrorString());
   }
 
   TriMesh out;
   std::vector<bool> meshSeen(scene->mNumMeshes, false);
-  if (scene->mRootNode != nullptr) {
-    collectNode(*scene, *scene->mRootNode, aiMatrix4x4(), meshSeen, out);
-  }
-  // Meshes no node refers to are unusual but still part of the file; take them untransformed.
-  for (unsigned int m = 0; m < scene->mNumMeshes; ++m) {
-    if (!meshSeen[m]) appendMesh(*scene->mMeshes[m], aiMatrix4x4(), out);
+  try {
+    if (scene->mRootNode != nullptr) {
+      collectNode(*scene, *scene->mRootNode, aiMatrix4x4(), meshSeen, out);
+    }
+    // Meshes no node refers to are unusual but still part of the file; take them untransformed.
+    for (unsigned int m = 0; m < scene->mNumMeshes; ++m) {
+      if (!meshSeen[m]) appendMesh(*scene->mMeshes[m], aiMatrix4x4(), out);
+    }
+  } catch (const Error& e) {
+    throw Error(path + ": " + e.what());
   }
 
   if (out.triangles.empty()) {
@@ -405,6 +544,46 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh) {
   return std::nullopt;
 }
 
+std::optional<std::string> findStrayVertex(const TriMesh& mesh) {
+  std::vector<double> lengths;
+  lengths.reserve(3 * mesh.triangles.size());
+  for (const Triangle& t : mesh.triangles) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      if (a < mesh.positions.size() && b < mesh.positions.size()) {
+        lengths.push_back(length(mesh.positions[b] - mesh.positions[a]));
+      }
+    }
+  }
+  if (lengths.empty()) return std::nullopt;
+  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+  std::nth_element(lengths.begin(), middle, lengths.end());
+  const double median = *middle;
+  const double longest = *std::max_element(lengths.begin(), lengths.end());
+  if (!(median > 0.0) || longest <= kStrayEdgeRatio * median) return std::nullopt;
+  // The stray vertex is the end of a longest edge farther from the coordinate-wise median point.
+  Vec3 centre;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> c;
+    c.reserve(mesh.positions.size());
+    for (const Vec3& p : mesh.positions) c.push_back(p[axis]);
+    const auto mid = c.begin() + static_cast<std::ptrdiff_t>(c.size() / 2);
+    std::nth_element(c.begin(), mid, c.end());
+    centre[axis] = *mid;
+  }
+  uint32_t worst = 0;
+  for (uint32_t i = 1; i < mesh.positions.size(); ++i) {
+    if (lengthSquared(mesh.positions[i] - centre) > lengthSquared(mesh.positions[worst] - centre)) worst = i;
+  }
+  const Vec3& p = mesh.positions[worst];
+  std::ostringstream text;
+  // By position: the reader's vertex numbers are not the file's (OBJ corners are split per face).
+  text << "the vertex at (" << p.x << ", " << p.y << ", " << p.z << ") is a stray: an edge of "
+       << longest << " where the median edge is " << median << " (over " << kStrayEdgeRatio
+       << " times longer); remove it from the file";
+  return text.str();
+}
+
 bool orientOutward(TriMesh& mesh) {
   if (centredVolume(mesh) >= 0.0) return false;
   for (Triangle& t : mesh.triangles) std::swap(t[1], t[2]);
@@ -413,6 +592,7 @@ bool orientOutward(TriMesh& mesh) {
 
 TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance) {
   const TriMesh raw = readMeshFile(path);
+  if (auto stray = findStrayVertex(raw)) throw Error(path + ": " + *stray);
   const double diagonal = boundsDiagonal(raw.positions);
   TriMesh mesh = weldVertices(raw, relativeWeldTolerance * diagonal);
   if (auto problem = findManifoldProblem(mesh)) {

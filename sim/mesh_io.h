@@ -43,6 +43,11 @@ TriMesh weldVertices(const TriMesh& mesh, double tolerance);
 // flipped face, non-manifold vertex, separate pieces. Self-intersection is not checked.
 std::optional<std::string> findManifoldProblem(const TriMesh& mesh);
 
+// A vertex far away from the rest (an edge over a million times longer than the median edge):
+// one such vertex sets the bounding box that welding and the zero-area test measure against, and
+// makes every other triangle look degenerate. Returns a description naming it, or nothing.
+std::optional<std::string> findStrayVertex(const TriMesh& mesh);
+
 // Orientation: if the closed mesh encloses negative volume (inside-out), flips every triangle.
 // Returns true if it flipped.
 bool orientOutward(TriMesh& mesh);

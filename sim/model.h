@@ -50,6 +50,7 @@ enum class MassDistribution { AngleWeightedArea, Uniform };
 // The user's description of one soft body, after its shape has been generated or loaded.
 struct BodyDesc {
   std::string name;
+  std::string source;  // where it was described, e.g. "scene.toml:12:1: [[body]] #2" (for messages)
   TriMesh mesh;  // rest shape, already scaled, rotated and placed in the world
   Vec3 velocity;  // initial velocity of every vertex [m/s]
   Vec3 angularVelocity;  // initial spin about the centroid [rad/s]

@@ -8,6 +8,7 @@
 #include <toml++/toml.h>
 
 #include "sim/error.h"
+#include "sim/limits.h"
 #include "sim/mesh_io.h"
 #include "sim/shapes.h"
 
@@ -42,9 +43,12 @@ class Reader {
     const toml::node* n = get(key);
     return n ? asNumber(*n, key) : fallback;
   }
-  std::optional<double> optionalNumber(std::string_view key) {
-    const toml::node* n = get(key);
-    return n ? std::optional<double>(asNumber(*n, key)) : std::nullopt;
+  std::optional<double> optionalInRange(std::string_view key, double lo, double hi) {
+    if (!has(key)) {
+      get(key);
+      return std::nullopt;
+    }
+    return inRange(key, 0.0, lo, hi);
   }
   double positive(std::string_view key, double fallback) {
     const toml::node* n = get(key);
@@ -239,6 +243,7 @@ uint32_t extremeVertex(const TriMesh& mesh, int axis, bool highest) {
 BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t index, Material& material) {
   Reader r(table, path, "[[body]] #" + std::to_string(index + 1));
   BodyDesc b;
+  b.source = location(path, table.source()) + ": [[body]] #" + std::to_string(index + 1);
   b.name = r.string("name", "body " + std::to_string(index + 1));
   const std::string shape =
       r.choice("shape", "octahedron_sphere", {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mesh"});
@@ -285,19 +290,27 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.massDistribution = r.choice("mass_distribution", "area", {"area", "uniform"}) == "uniform"
                            ? MassDistribution::Uniform
                            : MassDistribution::AngleWeightedArea;
-  b.mass = r.positive("mass", b.mass);
-  b.strutDecay = r.positive("strut_decay", b.strutDecay);
-  b.strutPeriod = r.positive("strut_period", b.strutPeriod);
-  b.hingeDecay = r.number("hinge_decay", b.hingeDecay);
-  b.hingePeriod = r.number("hinge_period", b.hingePeriod);
-  b.volumePeriod = r.positive("volume_period", 0.0);
-  b.strutStiffness = r.optionalNumber("strut_stiffness");
-  b.strutDamping = r.optionalNumber("strut_damping");
-  b.hingeStiffness = r.optionalNumber("hinge_stiffness");
-  b.hingeDamping = r.optionalNumber("hinge_damping");
-  for (auto* o : {&b.strutStiffness, &b.strutDamping, &b.hingeStiffness, &b.hingeDamping}) {
-    if (*o && !(**o >= 0.0)) r.failHere("spring constants must not be negative");
+  if (b.model == SpringModel::AllPairs && b.mesh.positions.size() > kMaxAllPairsVertices) {
+    r.fail(*r.get("model"), "model",
+           "all_pairs joins every pair of vertices: " + std::to_string(b.mesh.positions.size()) +
+               " vertices would make " + std::to_string(b.mesh.positions.size() * (b.mesh.positions.size() - 1) / 2) +
+               " struts; it takes at most " + std::to_string(kMaxAllPairsVertices) + " vertices");
   }
+  // Ranges that keep every derived constant finite and positive (a period of 1e-300 s or a mass
+  // of 1e-300 kg overflows the stiffness or underflows the frequency).
+  b.mass = r.inRange("mass", b.mass, kMinMass, kMaxMass);
+  b.strutDecay = r.inRange("strut_decay", b.strutDecay, kMinTime, kMaxTime);
+  b.strutPeriod = r.inRange("strut_period", b.strutPeriod, kMinTime, kMaxTime);
+  b.hingeDecay = r.number("hinge_decay", b.hingeDecay);
+  if (b.hingeDecay > 0.0) b.hingeDecay = r.inRange("hinge_decay", b.hingeDecay, kMinTime, kMaxTime);
+  b.hingePeriod = r.number("hinge_period", b.hingePeriod);
+  if (b.hingePeriod > 0.0) b.hingePeriod = r.inRange("hinge_period", b.hingePeriod, kMinTime, kMaxTime);
+  b.volumePeriod = r.has("volume_period") ? r.inRange("volume_period", 0.0, kMinTime, kMaxTime) : 0.0;
+  r.get("volume_period");
+  b.strutStiffness = r.optionalInRange("strut_stiffness", 0.0, kMaxConstant);
+  b.strutDamping = r.optionalInRange("strut_damping", 0.0, kMaxConstant);
+  b.hingeStiffness = r.optionalInRange("hinge_stiffness", 0.0, kMaxConstant);
+  b.hingeDamping = r.optionalInRange("hinge_damping", 0.0, kMaxConstant);
   // Pins: vertex indices or rules ("top", "bottom", "left", "right", "front", "back": the
   // extreme vertex along y, x or z), and pin_near = [[x, y, z], ...]: the nearest vertex.
   if (const toml::node* n = r.get("pin")) {
@@ -384,13 +397,13 @@ TriangleColliderDesc readTriangleCollider(const toml::table& table, const std::s
       m.triangles.push_back({base, base + 2, base + 3});
     }
   }
-  if (m.triangles.empty()) r.failHere("needs triangles: mesh = \"FILE\", vertices + indices, or quads");
   const Transform transform = readTransform(r);
   for (Vec3& p : m.positions) p = transform.apply(p);
   c.material = readContact(r);
   d.material = readMaterial(r, Material{{0.55, 0.5, 0.45}, 1.0, 16.0});
   d.visible = r.boolean("visible", true);
-  r.finish();
+  r.finish();  // first: a misspelt `quads` is an unknown key, not missing geometry
+  if (m.triangles.empty()) r.failHere("needs triangles: mesh = \"FILE\", vertices + indices, or quads");
   return d;
 }
 
@@ -413,7 +426,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
     scene.name = r.string("name", scene.name);
     scene.duration = r.positive("duration", scene.duration);
     scene.dt = r.positive("dt", scene.dt);
-    scene.substeps = r.integer("substeps", 1, 1, 100000);
+    scene.substeps = r.integer("substeps", 1, 1, kMaxSubsteps);
     if (const toml::node* n = r.get("integrator")) {
       if (!n->is_string() || !parseIntegrator(n->as_string()->get(), scene.integrator)) {
         r.fail(*n, "integrator", "must be one of: " + integratorNames());
@@ -531,10 +544,38 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
   }
   top.finish();
   if (scene.bodies.empty()) throw Error(path + ": the scene has no [[body]]");
+  std::uint64_t vertices = 0;
+  for (const BodyDesc& b : scene.bodies) vertices += b.mesh.positions.size();
+  if (vertices > kMaxSceneVertices) {
+    throw Error(path + ": the bodies have " + std::to_string(vertices) + " vertices in all, more than the limit of " +
+                std::to_string(kMaxSceneVertices));
+  }
+  if (auto problem = runSettingsProblem(scene)) {
+    const toml::node* table = root.get("scene");
+    throw Error((table ? location(path, table->source()) + ": [scene]" : path) + ": " + *problem);
+  }
   return scene;
 }
 
+std::optional<std::string> runSettingsProblem(const SceneDesc& scene) {
+  std::ostringstream text;
+  const double frame = 1.0 / scene.render.fps;
+  if (!(scene.dt <= frame * (1.0 + 1e-9))) {
+    text << "dt = " << scene.dt << " s is longer than one frame (1/fps = " << frame
+         << " s): the step must fit between two frames";
+    return text.str();
+  }
+  const double steps = scene.duration / stepSize(scene);
+  if (!(steps <= kMaxSteps)) {
+    text << "duration " << scene.duration << " s in steps of " << stepSize(scene) << " s (dt / substeps) is " << steps
+         << " steps, more than the limit of " << kMaxSteps;
+    return text.str();
+  }
+  return std::nullopt;
+}
+
 SceneDesc loadScene(const std::string& path) {
+  checkInputFile(path, kMaxSceneFileBytes, "scene file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open the scene file");
   std::ostringstream text;
@@ -567,7 +608,7 @@ Model buildModel(const SceneDesc& scene) {
     try {
       addBody(model, b);
     } catch (const Error& e) {
-      throw Error(scene.path + ": " + e.what());
+      throw Error((b.source.empty() ? scene.path : b.source) + ": " + e.what());
     }
   }
   for (const PlaneDesc& p : scene.planes) model.colliders.planes.push_back(p.collider);

@@ -99,6 +99,11 @@ SceneDesc loadScene(const std::string& path);
 // The same from text in memory (`path` is used in messages and to resolve mesh paths).
 SceneDesc parseScene(const std::string& text, const std::string& path);
 
+// Why a run with the scene's dt, substeps, duration and frame rate cannot be done, or nothing:
+// a step longer than one frame (no step would fall between two frames), or more than kMaxSteps
+// steps in all (sim/limits.h).
+std::optional<std::string> runSettingsProblem(const SceneDesc& scene);
+
 // The model a scene describes.
 Model buildModel(const SceneDesc& scene);
 

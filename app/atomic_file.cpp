@@ -5,7 +5,6 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <filesystem>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -14,45 +13,209 @@
 
 namespace springy {
 namespace {
-volatile std::sig_atomic_t gInterrupted = 0;
-void onSignal(int) { gInterrupted = 1; }
-}  // namespace
 
-bool interrupted() { return gInterrupted != 0; }
+// Written by the signal handler, read by every thread: a lock-free atomic is async-signal-safe.
+std::atomic<int> gSignal{0};
+static_assert(std::atomic<int>::is_always_lock_free);
 
-void installInterruptHandler() {
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
+void onSignal(int signal) {
+  int none = 0;
+  gSignal.compare_exchange_strong(none, signal);  // the first signal decides the exit status
 }
 
-AtomicFile::AtomicFile(std::string target) : target_(std::move(target)) {
-  namespace fs = std::filesystem;
-  const fs::path path(target_);
-  if (fs::is_directory(path)) throw Error(target_ + ": is a directory, expected a file name");
-  // Keep the extension last (tools such as FFmpeg pick the container from it).
-  std::string pattern = (path.parent_path() / ("." + path.stem().string() + ".tmp-XXXXXX")).string();
-  const std::string extension = path.extension().string();
-  pattern += extension;
-  std::string buffer = pattern;
-  const int fd = mkstemps(buffer.data(), static_cast<int>(extension.size()));
-  if (fd < 0) throw Error(target_ + ": cannot write here: " + std::strerror(errno));
-  // mkstemps creates the file private (0600); give it the permissions a new file would get.
-  const mode_t mask = ::umask(0);
-  ::umask(mask);
-  ::fchmod(fd, 0666 & ~mask);
-  ::close(fd);
+// The directory part of `path` with its trailing '/', or "" for a bare name.
+std::string directoryOf(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+std::string baseNameOf(const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+// `path` with its symbolic links followed to the file they end at, which may not exist yet (a new
+// output, or the end of a dangling link). Links in the directory part are left to the kernel.
+std::string followLinks(const std::string& path) {
+  std::string p = path;
+  for (int hops = 0;; ++hops) {
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0) {
+      if (errno == ENOENT) return p;
+      throw Error(path + ": cannot write here: " + errorText(errno));
+    }
+    if (!S_ISLNK(st.st_mode)) return p;
+    // The kernel's own limit (40 on Linux) before it reports a loop.
+    if (hops == 40) throw Error(path + ": cannot write here: " + errorText(ELOOP));
+    std::string link(static_cast<std::size_t>(st.st_size > 0 ? st.st_size : 4096) + 1, '\0');
+    const ssize_t n = ::readlink(p.c_str(), link.data(), link.size());
+    if (n <= 0) {
+      throw Error(path + ": cannot read the symbolic link '" + p + "': " + errorText(n < 0 ? errno : ENOENT));
+    }
+    link.resize(static_cast<std::size_t>(n));
+    p = link.front() == '/' ? link : directoryOf(p) + link;
+  }
+}
+
+}  // namespace
+
+std::string errorText(int error) { return std::strerror(error); }
+
+bool interrupted() { return gSignal.load() != 0; }
+int interruptSignal() { return gSignal.load(); }
+int interruptedExitStatus() {
+  const int s = gSignal.load();
+  return 128 + (s != 0 ? s : SIGINT);
+}
+
+void installInterruptHandler() {
+  struct sigaction action {};
+  action.sa_handler = onSignal;
+  sigemptyset(&action.sa_mask);
+  // Restart interrupted system calls: the loops poll the flag, no call needs to see EINTR.
+  action.sa_flags = SA_RESTART;
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    // A signal ignored by the parent stays ignored: `nohup springy render ...` must survive logout.
+    if (::sigaction(signal, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    ::sigaction(signal, &action, nullptr);
+  }
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  ::sigaction(SIGPIPE, &ignore, nullptr);
+  ::sigaction(SIGXFSZ, &ignore, nullptr);
+}
+
+bool isDirectory(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+bool sameFile(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  return ::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0 && sa.st_dev == sb.st_dev &&
+         sa.st_ino == sb.st_ino;
+}
+
+void makeDirectories(const std::string& path, const std::string& what) {
+  auto fail = [&](const std::string& part, int error) {
+    throw Error(what + " '" + path + "': cannot create the directory '" + part + "': " + errorText(error));
+  };
+  if (path.empty()) return;
+  // Each prefix ending before a '/', then the whole path.
+  for (std::size_t end = path.find('/', 1);; end = path.find('/', end + 1)) {
+    const std::string part = path.substr(0, end);
+    if (!part.empty() && part.back() != '/' && ::mkdir(part.c_str(), 0777) != 0) {
+      const int error = errno;
+      if (error != EEXIST) fail(part, error);
+      struct stat st {};
+      if (::stat(part.c_str(), &st) != 0) fail(part, errno);  // e.g. a dangling link, a loop
+      if (!S_ISDIR(st.st_mode)) fail(part, ENOTDIR);
+    }
+    if (end == std::string::npos) return;
+  }
+}
+
+AtomicFile::AtomicFile(std::string target, const std::vector<std::string>& inputs) : target_(std::move(target)) {
+  if (target_.empty()) throw Error("an output file name is empty");
+  if (target_.back() == '/' || isDirectory(target_)) throw Error(target_ + ": is a directory, expected a file name");
+  for (const std::string& input : inputs) {
+    if (sameFile(target_, input)) {
+      throw Error(target_ + ": is the input file '" + input + "'; refusing to write over it");
+    }
+  }
+  resolved_ = followLinks(target_);
+  mode_t mode = 0;
+  struct stat st {};
+  if (::stat(resolved_.c_str(), &st) == 0) {
+    // Renaming over anything else (a device, a pipe) would replace it rather than write to it.
+    if (!S_ISREG(st.st_mode)) {
+      throw Error(target_ + ": is not a regular file (outputs are written beside it and renamed over it)");
+    }
+    mode = st.st_mode & 07777;  // a replaced file keeps its permissions
+  } else {
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    mode = 0666 & ~mask;  // what a newly created file would get
+  }
+  // ".NAME.tmp-XXXXXX.EXT": hidden, and the extension last (FFmpeg picks the container from it).
+  // The stem is shortened when needed so that a name near the limit still has a temporary name.
+  const std::string base = baseNameOf(resolved_);
+  const std::size_t dot = base.rfind('.');
+  std::string extension = dot != std::string::npos && dot > 0 && base.size() - dot <= 16 ? base.substr(dot) : "";
+  std::string stem = base.substr(0, base.size() - extension.size());
+  const std::string marker = ".tmp-XXXXXX";
+  constexpr std::size_t kNameMax = 255;
+  const std::size_t fixed = 1 + marker.size() + extension.size();
+  if (fixed + stem.size() > kNameMax) stem.resize(kNameMax > fixed ? kNameMax - fixed : 0);
+  std::string buffer = directoryOf(resolved_) + "." + stem + marker + extension;
+  const int fd = ::mkostemps(buffer.data(), static_cast<int>(extension.size()), O_CLOEXEC);
+  if (fd < 0) throw Error(target_ + ": cannot write here: " + errorText(errno));
+  // mkostemps creates the file private (0600). (The destructor does not run for a constructor
+  // that throws: clean up here.)
+  if (::fchmod(fd, mode) != 0) {
+    const int error = errno;
+    ::close(fd);
+    ::unlink(buffer.c_str());
+    throw Error(target_ + ": cannot set the permissions of " + buffer + ": " + errorText(error));
+  }
+  fd_ = fd;
   temporary_ = buffer;
 }
 
 AtomicFile::~AtomicFile() {
-  if (!committed_) std::remove(temporary_.c_str());
+  if (fd_ >= 0) ::close(fd_);
+  if (!committed_ && !temporary_.empty()) ::unlink(temporary_.c_str());
+}
+
+void AtomicFile::fail(const std::string& what, int error) {
+  // Throwing here leaves the temporary file to the destructor.
+  throw Error(target_ + ": " + what + ": " + errorText(error) + " (" + target_ + " left as it was)");
+}
+
+void AtomicFile::write(std::span<const std::uint8_t> bytes) {
+  if (fd_ < 0) throw Error(target_ + ": written after it was committed");
+  usedWrite_ = true;
+  while (!bytes.empty()) {
+    const ssize_t n = ::write(fd_, bytes.data(), bytes.size());
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("writing failed", errno);
+    }
+    if (n == 0) fail("writing failed", EIO);
+    bytes = bytes.subspan(static_cast<std::size_t>(n));
+    written_ += static_cast<std::uint64_t>(n);
+  }
 }
 
 void AtomicFile::commit() {
-  if (std::rename(temporary_.c_str(), target_.c_str()) != 0) {
-    throw Error(target_ + ": cannot rename the finished output into place: " + std::strerror(errno));
+  if (fd_ < 0) throw Error(target_ + ": committed twice");
+  // The data must be on disk before the rename makes it the target: otherwise a crash soon after
+  // can leave an empty file under the final name. fsync also reports delayed write errors.
+  if (::fsync(fd_) != 0) fail("writing failed", errno);
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) fail("cannot examine " + temporary_, errno);
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0) fail("writing failed", errno);
+  if (st.st_size == 0) throw Error(target_ + ": the output is empty; not written (" + target_ + " left as it was)");
+  if (usedWrite_ && static_cast<std::uint64_t>(st.st_size) != written_) {
+    throw Error(target_ + ": " + std::to_string(st.st_size) + " bytes on disk, " + std::to_string(written_) +
+                " written; not written (" + target_ + " left as it was)");
+  }
+  if (std::rename(temporary_.c_str(), resolved_.c_str()) != 0) {
+    fail("cannot rename the finished output into place", errno);
   }
   committed_ = true;
+  // Make the rename itself durable. Best effort: some file systems cannot sync a directory, and
+  // the output is complete either way.
+  const std::string directory = directoryOf(resolved_);
+  const int dirFd = ::open(directory.empty() ? "." : directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dirFd >= 0) {
+    ::fsync(dirFd);
+    ::close(dirFd);
+  }
 }
 
 }  // namespace springy

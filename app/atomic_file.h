@@ -1,36 +1,86 @@
-// springy: output files that appear complete or not at all.
+// springy: output files that appear complete or not at all, and the signals that stop a run.
 //
-// Output is written to a temporary file beside the target (same directory, so the final
-// rename is atomic on POSIX) and renamed over the target only by commit(). If the program
-// fails or is interrupted first, the destructor removes the temporary file: a failure never
-// leaves a truncated file under the final name and never destroys an existing one.
+// Every output (videos, stills, traces) goes through AtomicFile: it is written to a temporary
+// file beside the target (same directory, so the final rename is atomic on POSIX) and renamed
+// over the target only by commit(), after the data was verified (every write checked, fsync
+// and close succeeded, the file is not empty). If the program fails or is interrupted first,
+// the destructor removes the temporary file: a failure never leaves a truncated file under the
+// final name and never destroys an existing one.
+//
+// Only non-throwing system calls are used (no throwing std::filesystem calls): every failure,
+// a name too long, a loop of symbolic links, a full disk, is a springy::Error naming the path
+// and the reason (strerror).
 #pragma once
 
+#include <cstdint>
+#include <span>
 #include <string>
+#include <vector>
 
 namespace springy {
 
 class AtomicFile {
  public:
   // Creates the temporary file at once, so an unwritable target is reported before any work.
+  // A target that is a symbolic link keeps the link: the temporary file is made beside the
+  // link's final target and renamed over it. A replaced file keeps its permission bits; a new
+  // one gets 0666 less the umask. Refuses a target that is a directory, not a regular file, or
+  // the same file as one of `inputs` (the files the output is made from, e.g. the scene).
   // Throws springy::Error naming the target.
-  explicit AtomicFile(std::string target);
+  explicit AtomicFile(std::string target, const std::vector<std::string>& inputs = {});
   ~AtomicFile();
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
 
+  // For writers that open the file by name themselves (FFmpeg, streams); they must report their
+  // own write errors, commit() then checks that the data reached the disk and is not empty.
   const std::string& temporaryPath() const { return temporary_; }
   const std::string& target() const { return target_; }
-  // Renames the temporary file over the target. Throws springy::Error on failure.
+  // Appends to the temporary file. Throws springy::Error naming the target when a write fails
+  // (ENOSPC: a full disk, EFBIG: over the file size limit, EIO).
+  void write(std::span<const std::uint8_t> bytes);
+  // Verifies the temporary file (fsync, close, size > 0, and all that write() wrote), then
+  // renames it over the target. Throws springy::Error naming the target on any failure, and
+  // the temporary file is removed.
   void commit();
 
  private:
-  std::string target_, temporary_;
+  [[noreturn]] void fail(const std::string& what, int error);
+  std::string target_;    // as the user named it (for messages)
+  std::string resolved_;  // the file that is replaced: target_ with symbolic links followed
+  std::string temporary_;
+  int fd_ = -1;
+  std::uint64_t written_ = 0;  // bytes through write()
+  bool usedWrite_ = false;
   bool committed_ = false;
 };
 
-// Set by SIGINT / SIGTERM; long loops poll it and stop, so temporary files are cleaned up.
-bool interrupted();
+// "REASON" for an errno value (strerror), for messages.
+std::string errorText(int error);
+
+// True when `path` names a directory (following links); false when it does not exist or cannot
+// be examined (the error shows when it is used).
+bool isDirectory(const std::string& path);
+
+// Creates the directory `path` and its missing parents (mkdir -p). Throws springy::Error
+// "`what` 'PATH': cannot create the directory 'PART': REASON" (e.g. what = "-o").
+void makeDirectories(const std::string& path, const std::string& what);
+
+// True when both paths exist and are the same file (same device and inode, links followed).
+bool sameFile(const std::string& a, const std::string& b);
+
+// SIGINT, SIGTERM and SIGHUP set a flag instead of killing the process; long loops poll it and
+// stop, so temporary files are removed. SIGPIPE and SIGXFSZ are ignored, so that writing to a
+// closed pipe or past the file size limit fails with EPIPE or EFBIG (and is reported) instead
+// of killing the process silently mid-write. A signal the parent set to be ignored (nohup) stays
+// ignored.
 void installInterruptHandler();
+// True once one of the signals arrived.
+bool interrupted();
+// The first signal that arrived (0 if none).
+int interruptSignal();
+// The exit status of an interrupted run: 128 + the signal's number, as a shell reports a process
+// killed by it (130 for SIGINT, 129 for SIGHUP, 143 for SIGTERM).
+int interruptedExitStatus();
 
 }  // namespace springy

@@ -12,10 +12,14 @@
 // serial order on one thread (the reference the tests compare against).
 // SPRINGY_RENDER_PROFILE=1 also prints the time of each render pass (glFinish after each);
 // SPRINGY_RENDER_AA=msaa anti-aliases with 4x MSAA instead of FXAA (for comparisons).
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -28,6 +32,7 @@
 #include "app/commands.h"
 #include "app/progress.h"
 #include "app/scene_view.h"
+#include "render/error.hpp"
 #include "render/image.hpp"
 #include "render/video_encoder.hpp"
 #include "sim/error.h"
@@ -38,33 +43,94 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
+// The command line's values get the same ranges as the scene's [render] keys (sim/scene.cpp), with
+// a message naming the option: a value out of range is an error, never clamped.
 void applyRenderOverrides(SceneDesc& scene, const RenderOverrides& o) {
   RenderDesc& r = scene.render;
-  if (o.width) r.width = *o.width;
-  if (o.height) r.height = *o.height;
-  if (r.width % 2 || r.height % 2 || r.width < 16 || r.height < 16) {
-    throw Error("the frame size must be even and at least 16 x 16, got " + std::to_string(r.width) + " x " +
-                std::to_string(r.height));
+  auto size = [](const char* option, int value, int most) {
+    if (value < 16 || value > most || value % 2) {
+      throw Error(std::string(option) + " " + std::to_string(value) + ": must be even and between 16 and " +
+                  std::to_string(most) + " (the video is yuv420p)");
+    }
+    return value;
+  };
+  if (o.width) r.width = size("--width", *o.width, 7680);
+  if (o.height) r.height = size("--height", *o.height, 4320);
+  if (o.fps) {
+    if (!(*o.fps >= 1.0 && *o.fps <= 240.0)) {
+      char text[64];
+      std::snprintf(text, sizeof text, "%g", *o.fps);
+      throw Error(std::string("--fps ") + text + ": must be between 1 and 240 frames per second");
+    }
+    r.fps = *o.fps;
   }
-  if (o.fps) r.fps = *o.fps;
-  if (!(r.fps >= 1.0 && r.fps <= 240.0)) throw Error("--fps must be between 1 and 240");
-  if (o.crf) r.crf = *o.crf;
+  if (o.crf) {
+    if (*o.crf < 0 || *o.crf > 51) throw Error("--crf " + std::to_string(*o.crf) + ": must be between 0 and 51");
+    r.crf = *o.crf;
+  }
   if (o.preset) r.preset = *o.preset;
   if (o.noOverlay) r.overlay = false;
   if (o.noShadows) r.shadows = false;
   if (o.noAntialias) r.antialias = false;
 }
 
-// Output path for one scene: OUT itself for a single scene and a file name, else OUT/stem.ext.
-std::string outputFor(const std::string& scenePath, const std::string& out, std::size_t sceneCount,
-                      const std::string& extension) {
+bool endsWithMp4(const std::string& name) {
+  if (name.size() < 4) return false;
+  std::string ext = name.substr(name.size() - 4);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".mp4";
+}
+
+std::string stemOf(const std::string& path) { return std::filesystem::path(path).stem().string(); }
+
+// The video each scene is written to, checked before any work. -o names a directory (it exists,
+// or ends in '/', or there are several scenes) that gets SCENE.mp4 for each scene, or, for one
+// scene, a file that must end in .mp4: anything else (`-o scene.toml`, a typo) would be
+// replaced by a video. Throws springy::Error.
+std::vector<std::string> videoOutputs(const RenderOptions& options) {
   namespace fs = std::filesystem;
-  const std::string stem = fs::path(scenePath).stem().string();
-  if (out.empty()) return stem + extension;
-  const bool isDir = fs::is_directory(out) || out.back() == '/' || sceneCount > 1;
-  if (!isDir) return out;
-  fs::create_directories(out);
-  return (fs::path(out) / (stem + extension)).string();
+  const std::string& out = options.output;
+  std::vector<std::string> outputs;
+  const bool several = options.scenes.size() > 1;
+  bool directory = !out.empty() && (isDirectory(out) || out.back() == '/');
+  if (!out.empty() && !directory) {
+    if (several) {
+      if (endsWithMp4(out)) {
+        throw Error("-o " + out + ": " + std::to_string(options.scenes.size()) +
+                    " scenes make one video each: give a directory, not a file name");
+      }
+      struct stat st {};
+      if (::stat(out.c_str(), &st) == 0) {
+        throw Error("-o " + out + ": is not a directory (" + std::to_string(options.scenes.size()) +
+                    " scenes make one video each)");
+      }
+      directory = true;
+    } else if (!endsWithMp4(out)) {
+      throw Error("-o " + out + ": a video's name must end in .mp4 (or name a directory: end it with '/')");
+    }
+  }
+  if (directory) makeDirectories(out, "-o");
+  for (const std::string& scene : options.scenes) {
+    const std::string name = stemOf(scene) + ".mp4";
+    outputs.push_back(out.empty() ? name : directory ? (fs::path(out) / name).string() : out);
+  }
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (outputs[i] == outputs[j]) {
+        throw Error(options.scenes[j] + " and " + options.scenes[i] + " would both be written to " + outputs[i]);
+      }
+    }
+  }
+  return outputs;
+}
+
+const char* signalName(int signal) {
+  switch (signal) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    default: return "a signal";
+  }
 }
 
 struct Frame {
@@ -84,10 +150,18 @@ struct Joiner {
   }
 };
 
+// The encoder's errors name the temporary file; the user knows the target.
+[[noreturn]] void videoFailed(const AtomicFile& output, const std::exception& e) {
+  throw Error(output.target() + ": writing the video failed: " + e.what() + " (" + output.target() +
+              " left as it was)");
+}
+
 int renderOne(const std::string& path, const std::string& outPath, const RenderOptions& options) {
   SceneDesc scene = loadSceneWith(path, options.overrides);
   applyRenderOverrides(scene, options.render);
-  AtomicFile output(outPath);  // an unwritable target fails here, before any simulation
+  checkCamera(scene);
+  // An unwritable target fails here, before any simulation; no scene is ever written over.
+  AtomicFile output(outPath, options.scenes);
   World world = makeWorld(scene, options.overrides);
   Monitor monitor(world);
   render::RenderSettings rs = renderSettingsOf(scene);
@@ -101,11 +175,15 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   render::VideoSettings vs;
   vs.width = scene.render.width;
   vs.height = scene.render.height;
-  vs.fps = static_cast<int>(std::lround(scene.render.fps));
+  vs.fps = scene.render.fps;
   vs.crf = scene.render.crf;
   vs.preset = scene.render.preset;
   if (const char* t = std::getenv("SPRINGY_X264_THREADS")) vs.threads = std::atoi(t);
-  encoder.open(output.temporaryPath(), vs);
+  try {
+    encoder.open(output.temporaryPath(), vs);
+  } catch (const render::RenderError& e) {
+    videoFailed(output, e);
+  }
 
   const long frames = std::max(1L, std::lround(scene.duration * scene.render.fps));
   const std::size_t bytes = static_cast<std::size_t>(scene.render.width) * static_cast<std::size_t>(scene.render.height) * 4;
@@ -147,7 +225,11 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
       takeSnapshot(world, snapshot);
       view.draw(snapshot);
       view.renderer().readPixels(f.rgba, render::RowOrder::BottomUp);
-      encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
+      try {
+        encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
+      } catch (const render::RenderError& e) {
+        videoFailed(output, e);
+      }
       report(k + 1);
     }
   } else {
@@ -216,29 +298,41 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
     }
     interruptedRun = simInterrupted;
     if (simError) std::rethrow_exception(simError);
-    if (encodeError) std::rethrow_exception(encodeError);
+    if (encodeError) {
+      try {
+        std::rethrow_exception(encodeError);
+      } catch (const render::RenderError& e) {
+        videoFailed(output, e);
+      }
+    }
   }
   progress.finish();
-  if (interruptedRun) {
-    std::cerr << "springy render: interrupted; " << output.target() << " not written\n";
-    return 130;
+  if (interruptedRun || interrupted()) {  // also a signal after the last frame was simulated
+    std::cerr << "springy render: interrupted by " << signalName(interruptSignal()) << "; " << output.target()
+              << " not written\n";
+    return interruptedExitStatus();
   }
   if (failure) {
     std::cerr << "springy render: " << path << ": " << failure->message << "\n"
               << "springy render: stopped; " << output.target() << " not written (no video of an unstable run)\n";
     return 1;
   }
-  encoder.finish();
+  try {
+    encoder.finish();
+  } catch (const render::RenderError& e) {
+    videoFailed(output, e);
+  }
   output.commit();
 
   const double wall = msSince(wallStart) / 1000.0;
   const auto& rt = view.renderer().timings();
   const render::EncodeTimings et = encoder.timings();
-  const auto size = std::filesystem::file_size(outPath);
+  struct stat st {};
+  const double size = ::stat(outPath.c_str(), &st) == 0 ? static_cast<double>(st.st_size) : 0.0;
   const double n = static_cast<double>(frames);
   std::printf("%s -> %s: %ld frames, %.2f s of %dx%d video at %g fps (%s), %.1f MB\n", path.c_str(), outPath.c_str(),
               frames, n / scene.render.fps, scene.render.width, scene.render.height,
-              scene.render.fps, encoder.codecName().c_str(), static_cast<double>(size) / 1e6);
+              scene.render.fps, encoder.codecName().c_str(), size / 1e6);
   std::printf("  wall %.1f s (%.1f frames/s); per frame: simulate %.1f ms, render %.1f ms, read back %.1f ms, "
               "convert %.1f ms, encode %.1f ms (%s)\n",
               wall, n / wall, static_cast<double>(simNs.load()) / 1e6 / n,
@@ -255,65 +349,117 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   return 0;
 }
 
-std::vector<double> parseTimes(const std::string& list) {
+// The times of --times, sorted. Each must be finite and within [0, duration]: a time past the end
+// (1e9, inf) would simulate for ever.
+std::vector<double> parseTimes(const std::string& list, double duration) {
   std::vector<double> times;
   std::size_t start = 0;
   while (start <= list.size()) {
     const std::size_t comma = std::min(list.find(',', start), list.size());
     const std::string item = list.substr(start, comma - start);
+    double t = 0.0;
     try {
       std::size_t used = 0;
-      const double t = std::stod(item, &used);
-      if (used != item.size() || !(t >= 0.0)) throw std::invalid_argument(item);
-      times.push_back(t);
+      t = std::stod(item, &used);
+      if (used != item.size()) throw std::invalid_argument(item);
     } catch (const std::exception&) {
       throw Error("--times: '" + item + "' is not a time in seconds (expected e.g. 0,0.5,1.5)");
     }
+    if (!std::isfinite(t)) throw Error("--times: '" + item + "' is not a finite time in seconds");
+    if (t < 0.0 || t > duration) {
+      char limit[64];
+      std::snprintf(limit, sizeof limit, "%g", duration);
+      throw Error("--times: '" + item + "' is not within the scene's duration, 0 to " + limit +
+                  " s (--duration changes it)");
+    }
+    times.push_back(t);
     start = comma + 1;
   }
   std::sort(times.begin(), times.end());
   return times;
 }
 
+// "t = 1.50 s" / "_t001.50": two decimals, or as many more as it takes to tell the times apart,
+// so that two stills never get the same file name (one would overwrite the other). The same
+// time twice is an error.
+int timeDecimals(const std::vector<double>& times) {
+  constexpr int kMost = 9;
+  for (int decimals = 2; decimals <= kMost; ++decimals) {
+    bool distinct = true;
+    char a[64], b[64];
+    for (std::size_t i = 1; i < times.size() && distinct; ++i) {
+      std::snprintf(a, sizeof a, "%.*f", decimals, times[i - 1]);
+      std::snprintf(b, sizeof b, "%.*f", decimals, times[i]);
+      distinct = std::string(a) != b;
+    }
+    if (distinct) return decimals;
+  }
+  for (std::size_t i = 1; i < times.size(); ++i) {
+    char a[64], b[64];
+    std::snprintf(a, sizeof a, "%.*f", kMost, times[i - 1]);
+    std::snprintf(b, sizeof b, "%.*f", kMost, times[i]);
+    if (std::string(a) == b) {
+      char t0[32], t1[32];
+      std::snprintf(t0, sizeof t0, "%.17g", times[i - 1]);
+      std::snprintf(t1, sizeof t1, "%.17g", times[i]);
+      throw Error(times[i - 1] == times[i] ? "--times: " + std::string(t0) + " is given twice"
+                                           : "--times: " + std::string(t0) + " and " + t1 +
+                                                 " are too close to tell apart in the stills' file names");
+    }
+  }
+  return kMost;
+}
+
 int framesOne(const std::string& path, const FramesOptions& options) {
   namespace fs = std::filesystem;
   SceneDesc scene = loadSceneWith(path, options.overrides);
   applyRenderOverrides(scene, options.render);
-  std::vector<double> times = options.times.empty() ? std::vector<double>{} : parseTimes(options.times);
+  checkCamera(scene);
+  std::vector<double> times =
+      options.times.empty() ? std::vector<double>{} : parseTimes(options.times, scene.duration);
   if (times.empty()) {
     for (int i = 0; i < 8; ++i) times.push_back(scene.duration * i / 7.0);  // eight evenly spaced stills
   }
-  fs::create_directories(options.output);
-  const std::string stem = fs::path(path).stem().string();
+  const int decimals = timeDecimals(times);
+  makeDirectories(options.output, "-o");
+  const std::string stem = stemOf(path);
   World world = makeWorld(scene, options.overrides);
   Monitor monitor(world);
   SceneView view(scene, world, renderSettingsOf(scene));
   std::vector<render::Image> stills;
   std::vector<std::string> labels;
   const double frame = 1.0 / scene.render.fps;
+  auto stopped = [&](const std::string& what) {
+    std::cerr << "springy frames: interrupted by " << signalName(interruptSignal()) << "; " << what
+              << " not written\n";
+    return interruptedExitStatus();
+  };
+  // Writes a PNG through the one checked writer: a full disk is an error, never a truncated file.
+  auto write = [&](const std::string& file, const render::Image& image) {
+    AtomicFile out(file, options.scenes);
+    out.write(render::encodePng(image));
+    out.commit();
+    std::printf("%s\n", file.c_str());
+  };
   for (double t : times) {
-    // Step frame by frame so the monitor sees the run as densely as a video would.
+    char label[64], name[64];
+    std::snprintf(label, sizeof label, "t = %.*f s", decimals, t);
+    std::snprintf(name, sizeof name, "_t%0*.*f.png", decimals + 4, decimals, t);
+    const std::string file = (fs::path(options.output) / (stem + name)).string();
+    // Step frame by frame so the monitor sees the run as densely as a video would, and a signal
+    // stops the run within a frame's simulation.
     while (world.time() < t - 0.5 * world.dt()) {
+      if (interrupted()) return stopped(options.sheetOnly ? "the contact sheet" : file);
       const double next = std::min(t, world.time() + frame);
       if (std::optional<Failure> failure = advanceTo(world, monitor, next)) {
         std::cerr << "springy frames: " << path << ": " << failure->message << "\n";
         return 1;
       }
-      if (interrupted()) return 130;
     }
+    if (interrupted()) return stopped(options.sheetOnly ? "the contact sheet" : file);
     view.draw(world);
     render::Image image = view.renderer().readImage();
-    char label[64];
-    std::snprintf(label, sizeof label, "t = %.2f s", t);
-    if (!options.sheetOnly) {
-      char name[64];
-      std::snprintf(name, sizeof name, "_t%06.2f.png", t);
-      const std::string file = (fs::path(options.output) / (stem + name)).string();
-      AtomicFile out(file);
-      render::writePng(out.temporaryPath(), image);
-      out.commit();
-      std::printf("%s\n", file.c_str());
-    }
+    if (!options.sheetOnly) write(file, image);
     stills.push_back(std::move(image));
     labels.push_back(label);
   }
@@ -321,10 +467,8 @@ int framesOne(const std::string& path, const FramesOptions& options) {
     render::ContactSheetOptions sheet;
     sheet.columns = std::min<int>(4, static_cast<int>(stills.size()));
     const std::string file = (fs::path(options.output) / (stem + "_sheet.png")).string();
-    AtomicFile out(file);
-    render::writePng(out.temporaryPath(), render::makeContactSheet(stills, labels, sheet));
-    out.commit();
-    std::printf("%s\n", file.c_str());
+    if (interrupted()) return stopped(file);
+    write(file, render::makeContactSheet(stills, labels, sheet));
   }
   return 0;
 }
@@ -332,31 +476,48 @@ int framesOne(const std::string& path, const FramesOptions& options) {
 }  // namespace
 
 int runRender(const RenderOptions& options) {
+  std::vector<std::string> outputs;
+  try {
+    outputs = videoOutputs(options);
+  } catch (const std::exception& e) {
+    std::cerr << "springy render: " << e.what() << "\n";
+    return 1;
+  }
   int status = 0;
-  for (const std::string& path : options.scenes) {
+  for (std::size_t i = 0; i < options.scenes.size(); ++i) {
+    const std::string& path = options.scenes[i];
     try {
-      const int s = renderOne(path, outputFor(path, options.output, options.scenes.size(), ".mp4"), options);
-      if (s == 130) return s;
-      status = std::max(status, s);
+      status = std::max(status, renderOne(path, outputs[i], options));
     } catch (const std::exception& e) {
       std::cerr << "springy render: " << e.what() << "\n";
-      status = 1;
+      status = std::max(status, 1);
     }
+    if (interrupted()) return interruptedExitStatus();
   }
   return status;
 }
 
 int runFrames(const FramesOptions& options) {
+  // Scenes with the same name would write the same stills.
+  for (std::size_t i = 0; i < options.scenes.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (stemOf(options.scenes[i]) == stemOf(options.scenes[j])) {
+        std::cerr << "springy frames: " << options.scenes[j] << " and " << options.scenes[i]
+                  << " would both be written to " << options.output << "/" << stemOf(options.scenes[i])
+                  << "_*.png\n";
+        return 1;
+      }
+    }
+  }
   int status = 0;
   for (const std::string& path : options.scenes) {
     try {
-      const int s = framesOne(path, options);
-      if (s == 130) return s;
-      status = std::max(status, s);
+      status = std::max(status, framesOne(path, options));
     } catch (const std::exception& e) {
       std::cerr << "springy frames: " << e.what() << "\n";
-      status = 1;
+      status = std::max(status, 1);
     }
+    if (interrupted()) return interruptedExitStatus();
   }
   return status;
 }

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <span>
 
+#include "sim/error.h"
+
 namespace springy {
 namespace {
 
@@ -27,6 +29,16 @@ Vec3 forwardFromAngles(const Vec3& degrees) {
 
 }  // namespace
 
+void checkCamera(const SceneDesc& scene) {
+  const CameraDesc& c = scene.render.camera;
+  if (c.position && c.target && *c.position == *c.target) {
+    char at[128];
+    std::snprintf(at, sizeof at, "[%g, %g, %g]", c.position->x, c.position->y, c.position->z);
+    throw Error(scene.path + ": [render.camera] position and target are the same point " + at +
+                ": the camera has no direction to look in; move one of them");
+  }
+}
+
 render::RenderSettings renderSettingsOf(const SceneDesc& scene) {
   render::RenderSettings s;
   s.width = scene.render.width;
@@ -39,6 +51,7 @@ render::RenderSettings renderSettingsOf(const SceneDesc& scene) {
 
 SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderSettings settings)
     : scene_(scene), renderer_(settings) {
+  checkCamera(scene);
   const Model& model = world.model();
   const RenderDesc& rd = scene.render;
   integrator_ = std::string(integratorName(world.integrator()));

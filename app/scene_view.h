@@ -40,6 +40,10 @@ class SceneView {
   FrameSnapshot scratch_;  // for draw(world)
 };
 
+// Throws springy::Error naming the scene file and the keys when the scene's camera cannot look
+// anywhere ([render.camera] position == target). Called before any output is created.
+void checkCamera(const SceneDesc& scene);
+
 // Render settings from a scene's [render] table.
 render::RenderSettings renderSettingsOf(const SceneDesc& scene);
 

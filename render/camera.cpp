@@ -3,10 +3,32 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <string>
+
+#include "render/error.hpp"
 
 namespace springy::render {
 
-glm::mat4 Camera::view() const { return glm::lookAt(position, target, up); }
+glm::mat4 Camera::view() const {
+  const glm::vec3 forward = target - position;
+  const float length = glm::length(forward), upLength = glm::length(up);
+  // lookAt needs a direction and an up vector not parallel to it: with position == target it
+  // divides by zero, and looking straight along up (a camera right above its target) it builds a
+  // degenerate basis, NaNs, and the frame shows only sky.
+  if (!(length > 0.0f) || !(upLength > 0.0f))
+    throw RenderError("camera: position (" + std::to_string(position.x) + ", " + std::to_string(position.y) +
+                      ", " + std::to_string(position.z) + ") and target must differ, and up must not be zero");
+  glm::vec3 u = up / upLength;
+  const float along = glm::dot(forward / length, u);
+  if (std::abs(along) > 0.999999f) {  // within 0.08 degrees
+    // (Nearly) vertical view: the image's up becomes the horizontal direction the camera would
+    // face had it pitched down (or up) from a level view along -Z, so looking down from above,
+    // -Z is at the top of the frame, continuous with a camera tilting down towards the target.
+    const glm::vec3 side = std::abs(u.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 0.0f, 1.0f);
+    u = glm::normalize(glm::cross(u, side)) * (along < 0.0f ? 1.0f : -1.0f);
+  }
+  return glm::lookAt(position, target, u);
+}
 
 glm::mat4 Camera::projection(float aspect) const {
   return glm::perspective(glm::radians(fovYDeg), aspect, nearPlane, farPlane);

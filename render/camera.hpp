@@ -14,7 +14,9 @@ struct Camera {
   float nearPlane = 0.05f;
   float farPlane = 500.0f;
 
-  glm::mat4 view() const;                     // glm::lookAt(position, target, up)
+  // glm::lookAt(position, target, up); when the view is (nearly) parallel to `up` another up is
+  // chosen (see camera.cpp). Throws RenderError when position == target.
+  glm::mat4 view() const;
   glm::mat4 projection(float aspect) const;   // glm::perspective, aspect = width / height
   glm::mat4 viewProjection(float aspect) const { return projection(aspect) * view(); }
 

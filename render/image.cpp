@@ -3,7 +3,11 @@
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <memory>
 
@@ -11,16 +15,58 @@
 
 namespace springy::render {
 
-void writePng(const std::string& path, int width, int height, std::span<const std::uint8_t> rgba) {
+namespace {
+
+void checkSize(const std::string& what, int width, int height, std::span<const std::uint8_t> rgba) {
   if (width <= 0 || height <= 0 ||
       rgba.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 4)
-    throw RenderError("writePng '" + path + "': size " + std::to_string(rgba.size()) +
-                      " bytes does not match " + std::to_string(width) + "x" +
-                      std::to_string(height) + " RGBA");
+    throw RenderError(what + ": size " + std::to_string(rgba.size()) + " bytes does not match " +
+                      std::to_string(width) + "x" + std::to_string(height) + " RGBA");
+}
+
+void append(void* context, void* data, int size) {
+  auto* out = static_cast<std::vector<std::uint8_t>*>(context);
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  out->insert(out->end(), bytes, bytes + size);
+}
+
+std::string errnoText(int error) { return std::strerror(error); }
+
+}  // namespace
+
+std::vector<std::uint8_t> encodePng(int width, int height, std::span<const std::uint8_t> rgba) {
+  checkSize("encodePng", width, height, rgba);
   // stb's flip flag is global state; rows are already top-down, so keep it off.
   stbi_flip_vertically_on_write(0);
-  if (!stbi_write_png(path.c_str(), width, height, 4, rgba.data(), width * 4))
-    throw RenderError("writePng: cannot write '" + path + "'");
+  std::vector<std::uint8_t> png;
+  if (!stbi_write_png_to_func(append, &png, width, height, 4, rgba.data(), width * 4) || png.empty())
+    throw RenderError("encodePng: cannot encode a " + std::to_string(width) + "x" + std::to_string(height) +
+                      " image");
+  return png;
+}
+
+void writePng(const std::string& path, int width, int height, std::span<const std::uint8_t> rgba) {
+  checkSize("writePng '" + path + "'", width, height, rgba);
+  const std::vector<std::uint8_t> png = encodePng(width, height, rgba);
+  // Plain POSIX calls with every result checked: stbi_write_png ignores fwrite's and fclose's
+  // results, so a full disk gave a truncated file and success.
+  auto fail = [&](const std::string& what, int error) {
+    throw RenderError("writePng '" + path + "': " + what + ": " + errnoText(error));
+  };
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) fail("cannot open", errno);
+  std::size_t done = 0;
+  while (done < png.size()) {
+    const ssize_t n = ::write(fd, png.data() + done, png.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = n < 0 ? errno : EIO;
+      ::close(fd);
+      fail("cannot write", error);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::close(fd) != 0) fail("cannot write", errno);
 }
 
 Image readPng(const std::string& path) {

@@ -10,8 +10,15 @@
 
 namespace springy::render {
 
+// An RGBA8 top-down image (rgba.size() == width*height*4) as the bytes of a PNG file, for
+// writers that check every write themselves (the app's AtomicFile). Throws RenderError.
+std::vector<std::uint8_t> encodePng(int width, int height, std::span<const std::uint8_t> rgba);
+inline std::vector<std::uint8_t> encodePng(const Image& image) {
+  return encodePng(image.width, image.height, image.rgba);
+}
 // Writes an RGBA8 top-down image (rgba.size() == width*height*4). Throws RenderError naming the
-// path on failure. Writes exactly `path` (no temp file).
+// path and the reason (strerror) when any write or the close fails (a full disk). Writes exactly
+// `path` (no temp file; a failure may leave a partial file).
 void writePng(const std::string& path, int width, int height, std::span<const std::uint8_t> rgba);
 inline void writePng(const std::string& path, const Image& image) {
   writePng(path, image.width, image.height, image.rgba);

@@ -985,7 +985,10 @@ void Renderer::setMaterial(MeshId id, const Material& material) {
 }
 void Renderer::setVisible(MeshId id, bool visible) { impl_->mesh(id).visible = visible; }
 
-void Renderer::setCamera(const Camera& camera) { impl_->camera = camera; }
+void Renderer::setCamera(const Camera& camera) {
+  (void)camera.view();  // a degenerate camera (position == target) throws here, not mid-frame
+  impl_->camera = camera;
+}
 const Camera& Renderer::camera() const { return impl_->camera; }
 void Renderer::setLight(const Light& light) {
   if (!(glm::length(light.direction) > 0.0f))

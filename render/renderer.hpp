@@ -118,7 +118,7 @@ public:
   void setVisible(MeshId id, bool visible);
 
   // --- Scene.
-  void setCamera(const Camera& camera);
+  void setCamera(const Camera& camera);  // throws RenderError when position == target
   const Camera& camera() const;
   void setLight(const Light& light);
   void setSky(glm::vec3 top, glm::vec3 bottom);  // vertical gradient, top row = top colour

@@ -10,6 +10,7 @@ extern "C" {
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <mutex>
 
@@ -95,8 +96,11 @@ struct VideoEncoder::Impl {
     if (s.width <= 0 || s.height <= 0 || s.width % 2 || s.height % 2)
       throw RenderError("VideoEncoder '" + p + "': width and height must be positive and even, got " +
                         std::to_string(s.width) + "x" + std::to_string(s.height));
-    if (s.fps <= 0 || s.fps > 1000)
+    if (!(s.fps >= 0.01 && s.fps <= 1000.0))
       throw RenderError("VideoEncoder '" + p + "': bad frame rate " + std::to_string(s.fps));
+    // A fraction, not the rounded integer: 1.4 frames/s written as 1 played 40% slow. MPEG-4
+    // part 2 allows time base denominators up to 65535.
+    const AVRational rate = av_d2q(s.fps, 65535);
     try {
       int ret = avformat_alloc_output_context2(&fmt, nullptr, nullptr, p.c_str());
       if (ret < 0 || !fmt) {
@@ -125,16 +129,17 @@ struct VideoEncoder::Impl {
       codec->codec_id = enc->id;
       codec->width = s.width;
       codec->height = s.height;
-      codec->time_base = AVRational{1, s.fps};
-      codec->framerate = AVRational{s.fps, 1};
+      codec->time_base = av_inv_q(rate);
+      codec->framerate = rate;
       codec->pix_fmt = AV_PIX_FMT_YUV420P;
-      codec->gop_size = std::max(1, s.fps * 2);
+      codec->gop_size = std::max(1, static_cast<int>(std::lround(s.fps * 2.0)));
       codec->thread_count = std::max(0, s.threads);
       codec->color_primaries = AVCOL_PRI_BT709;
       codec->color_trc = AVCOL_TRC_BT709;
       codec->colorspace = AVCOL_SPC_BT709;
       codec->color_range = AVCOL_RANGE_MPEG;
       stream->time_base = codec->time_base;
+      stream->avg_frame_rate = rate;
       if (fmt->oformat->flags & AVFMT_GLOBALHEADER) codec->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
       AVDictionary* opts = nullptr;
       if (!fallback) {
@@ -220,8 +225,14 @@ struct VideoEncoder::Impl {
     const auto t0 = Clock::now();
     try {
       encode(nullptr);
-      const int ret = av_write_trailer(fmt);
+      int ret = av_write_trailer(fmt);
       if (ret < 0) fail("cannot write the trailer", ret);
+      // Closing flushes the last buffered bytes: its result is the last write's (a full disk).
+      if (fileOpen) {
+        fileOpen = false;
+        ret = avio_closep(&fmt->pb);
+        if (ret < 0) fail("cannot write the file", ret);
+      }
     } catch (...) {
       close();
       throw;
@@ -242,7 +253,7 @@ VideoEncoder::~VideoEncoder() = default;
 void VideoEncoder::open(const std::string& path, const VideoSettings& settings) {
   impl_->open(path, settings);
 }
-void VideoEncoder::open(const std::string& path, int width, int height, int fps, int crf,
+void VideoEncoder::open(const std::string& path, int width, int height, double fps, int crf,
                         const std::string& preset) {
   VideoSettings s;
   s.width = width;

@@ -17,7 +17,8 @@ namespace springy::render {
 struct VideoSettings {
   int width = 1280;   // even
   int height = 720;   // even
-  int fps = 30;
+  double fps = 30.0;               // frames per second, any rational (1.4, 29.97): the time base
+                                   // is the nearest fraction (av_d2q), so the video plays at it
   int crf = 20;                    // x264 constant rate factor (0..51, lower = better)
   std::string preset = "veryfast"; // x264 preset (ultrafast .. veryslow)
   int threads = 0;                 // encoder threads, 0 = codec default (all cores)
@@ -44,14 +45,15 @@ public:
   // RenderError (with FFmpeg's error text and the path) on failure; if the failure comes after
   // the file was created, an empty or partial file may remain at `path`.
   void open(const std::string& path, const VideoSettings& settings);
-  void open(const std::string& path, int width, int height, int fps, int crf = 20,
+  void open(const std::string& path, int width, int height, double fps, int crf = 20,
             const std::string& preset = "veryfast");
   bool isOpen() const;
 
   // One RGBA8 frame, width*height*4 bytes, rows top-down (or bottom-up, as glReadPixels gives
   // them: flipped during the colour conversion at no cost).
   void writeFrame(std::span<const std::uint8_t> rgba, RowOrder order = RowOrder::TopDown);
-  // Flushes the encoder and writes the trailer. After it the encoder is closed.
+  // Flushes the encoder, writes the trailer and closes the file; throws RenderError if any write
+  // failed (a full disk). After it the encoder is closed.
   void finish();
 
   std::string codecName() const;  // "libx264" or "mpeg4" (empty before open)

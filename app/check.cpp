@@ -80,7 +80,7 @@ int runCheck(const CheckOptions& options) {
     for (long k = 1; k <= frames && !failure; ++k) {
       if (interrupted()) {
         std::cerr << "springy check: interrupted\n";
-        return 130;
+        return interruptedExitStatus();
       }
       failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
       progress.update(k, std::to_string(world.stepCount()) + " steps");

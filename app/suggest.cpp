@@ -1,5 +1,6 @@
 // `springy suggest` and the time-step advice of check/render/frames: the stability advisor
 // (sim/stability.h) applied to a scene.
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <cstdio>
@@ -37,15 +38,26 @@ double smallestStable(F stable, double lo, double hi) {
 void adviseTimeStep(const std::string& path, SceneDesc& scene, bool autoSubsteps, std::ostream& log) {
   const Model model = buildModel(scene);
   const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
+  const BodyStability& b = r.bodies.empty() ? BodyStability{} : r.bodies[r.limitingBody];
+  const std::string& body = r.bodies.empty() ? path : model.bodies[r.limitingBody].name;
+  if (!(r.dtMax > 0.0) || !std::isfinite(b.omegaMax) || !std::isfinite(b.gammaMax)) {
+    throw Error(path + ": body '" + body + "': its stiffest mode has no finite frequency (omega_max " +
+                std::to_string(b.omegaMax) + " rad/s, damping rate " + std::to_string(b.gammaMax) +
+                " 1/s): its mass, periods or spring constants are out of proportion");
+  }
   if (!std::isfinite(r.dtMax)) return;
-  const BodyStability& b = r.bodies[r.limitingBody];
-  const std::string& body = model.bodies[r.limitingBody].name;
   const int needed = safeSubsteps(scene.dt, r.dtMax, kSafety);
   if (autoSubsteps) {
-    scene.substeps = needed;
-    log << "springy: " << path << ": --substeps auto: " << needed << " (step " << seconds(stepSize(scene))
+    // Never fewer than the scene's own: the estimate is made at rest, and a scene may need more
+    // for its impacts (bunny_light's 16: with 1 substep its bunny's landing gains energy).
+    const int own = scene.substeps;
+    scene.substeps = std::max(own, needed);
+    log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
         << ", estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator) << ", body '"
-        << body << "')\n";
+        << body << "'" << (own >= needed ? "; the scene's own count, which is at least the estimate's " +
+                                                std::to_string(needed)
+                                          : std::string())
+        << ")\n";
   } else if (stepSize(scene) > r.dtMax) {
     log << "springy: warning: " << path << ": the step " << seconds(stepSize(scene))
         << " exceeds the estimated stable limit " << seconds(r.dtMax) << " of " << integratorName(scene.integrator)

@@ -611,6 +611,24 @@ Model buildModel(const SceneDesc& scene) {
       throw Error((b.source.empty() ? scene.path : b.source) + ": " + e.what());
     }
   }
+  // A body that starts inside a plane's solid is pushed out violently on the first step (the
+  // monitor then reports energy rising from nothing): say where instead.
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+    const BodyDesc& body = scene.bodies[b];
+    const double size = length(boundsOf(body.mesh.positions).size());
+    for (std::size_t p = 0; p < scene.planes.size(); ++p) {
+      const PlaneCollider& plane = scene.planes[p].collider;
+      for (std::size_t v = 0; v < body.mesh.positions.size(); ++v) {
+        const double depth = -dot(body.mesh.positions[v] - plane.point, plane.normal);
+        if (depth > 1e-9 * size) {
+          std::ostringstream text;
+          text << body.source << ": body '" << body.name << "' starts inside [[plane]] #" << p + 1 << ": its vertex " << v
+               << " is " << depth << " m behind the plane; move the body (position) to the plane's open side";
+          throw Error(text.str());
+        }
+      }
+    }
+  }
   for (const PlaneDesc& p : scene.planes) model.colliders.planes.push_back(p.collider);
   for (const TriangleColliderDesc& t : scene.triangleColliders) model.colliders.meshes.push_back(t.collider);
   // Impacts slower than a few steps' worth of gravity are resting contact, not bounces: a

@@ -372,6 +372,53 @@ TEST(RenderScene, FrameBoundsShowsTheWholeBox) {
   }
 }
 
+// Looking straight down (or up) the view is parallel to up: lookAt built a degenerate basis and
+// the frame was only sky. Another up vector is chosen: the target is at the centre, -Z at the top
+// when looking down (as a camera tilted down from a level view along -Z), +Z when looking up.
+TEST(RenderScene, CameraStraightAboveOrBelowItsTarget) {
+  Camera down;
+  down.position = {0.0f, 30.0f, 0.0f};
+  down.target = {0.0f, 0.0f, 0.0f};
+  const glm::mat4 view = down.view();
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) EXPECT_TRUE(std::isfinite(view[c][r]));
+  glm::vec3 p = projectToPixel(down, {0.0f, 0.0f, 0.0f}, 64, 48);
+  EXPECT_NEAR(p.x, 32.0f, 1e-3f);
+  EXPECT_NEAR(p.y, 24.0f, 1e-3f);
+  EXPECT_LT(projectToPixel(down, {0.0f, 0.0f, -1.0f}, 64, 48).y, 24.0f);  // -Z towards the top
+  Camera up = down;
+  up.position = {0.0f, -30.0f, 0.0f};
+  EXPECT_LT(projectToPixel(up, {0.0f, 0.0f, 1.0f}, 64, 48).y, 24.0f);  // +Z towards the top
+  // Nearly straight down: the same picture as straight down, not a spin by the tiny offset.
+  Camera nearly = down;
+  nearly.position.x = 1e-5f;
+  p = projectToPixel(nearly, {0.0f, 0.0f, -1.0f}, 64, 48);
+  EXPECT_NEAR(p.x, 32.0f, 0.1f);
+  EXPECT_LT(p.y, 24.0f);
+
+  // And it renders: a red box under the camera fills the centre, no sky there.
+  Renderer r(small());
+  const glm::vec3 sky(0.5f);
+  r.setSky(sky, sky);
+  r.setCamera(down);
+  Material m;
+  m.colour = {1.0f, 0.1f, 0.1f};
+  r.addStaticMesh(makeBox({0.0f, 0.0f, 0.0f}, glm::vec3(3.0f)), m);
+  r.render();
+  std::vector<std::uint8_t> rgba;
+  r.readPixels(rgba);
+  const glm::vec3 centre = pixel(rgba, 64, 32, 24);
+  EXPECT_GT(centre.r, centre.g + 40.0f);
+}
+
+TEST(RenderScene, CameraAtItsTargetThrows) {
+  Camera c;
+  c.position = c.target = {1.0f, 2.0f, 3.0f};
+  EXPECT_THROW(c.view(), RenderError);
+  Renderer r(small());
+  EXPECT_THROW(r.setCamera(c), RenderError);
+}
+
 TEST(RenderScene, InvalidInputsThrow) {
   Renderer r(small());
   const std::vector<float> pos{0, 0, 0, 1, 0, 0, 0, 1, 0};

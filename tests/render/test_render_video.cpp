@@ -76,6 +76,7 @@ struct Decoded {
   std::vector<std::vector<std::uint8_t>> frames;  // RGBA, top-down
   double durationSeconds = 0.0;
   AVRational timeBase{0, 1};
+  AVRational frameRate{0, 1};  // the stream's average frame rate
   std::string codec;
 };
 
@@ -88,6 +89,7 @@ Decoded decode(const std::string& path) {
   if (si < 0) throw std::runtime_error("no video stream");
   AVStream* st = fmt->streams[si];
   out.timeBase = st->time_base;
+  out.frameRate = st->avg_frame_rate;
   out.codec = avcodec_get_name(st->codecpar->codec_id);
   out.colorspace = st->codecpar->color_space;
   if (st->duration > 0) out.durationSeconds = double(st->duration) * av_q2d(st->time_base);
@@ -193,6 +195,39 @@ protected:
 TEST_F(VideoTest, H264RoundTrip) { roundTrip(false, 30.0); }
 
 TEST_F(VideoTest, Mpeg4FallbackRoundTrip) { roundTrip(true, 30.0); }
+
+// A fractional rate is kept as a fraction (av_d2q): 1.4 frames/s was written as 1, and 7 frames
+// played for 7 s instead of 5.
+TEST_F(VideoTest, FractionalFrameRatePlaysAtThatRate) {
+  for (const double fps : {1.4, 29.97}) {
+    const std::string path = (dir / "fractional.mp4").string();
+    const int n = 7;
+    {
+      VideoEncoder enc;
+      enc.open(path, W, H, fps);
+      for (int k = 0; k < n; ++k) enc.writeFrame(makeFrame(k));
+      enc.finish();
+    }
+    const Decoded d = decode(path);
+    ASSERT_EQ(d.frames.size(), std::size_t{n});
+    EXPECT_NEAR(av_q2d(d.frameRate), fps, 1e-9) << fps;
+    EXPECT_NEAR(d.durationSeconds, n / fps, 1e-3) << fps;
+    for (std::size_t i = 0; i < d.pts.size(); ++i)
+      EXPECT_NEAR(double(d.pts[i]) * av_q2d(d.timeBase), double(i) / fps, 1e-3) << fps << " frame " << i;
+  }
+}
+
+// The same through `springy render --fps 1.4`: 5 s of scene are 7 frames lasting 5 s.
+TEST_F(VideoTest, RenderWithAFractionalFpsKeepsTheDuration) {
+  const std::string out = (dir / "fps.mp4").string();
+  const std::string cmd = std::string(SPRINGY_BINARY) + " render " + SPRINGY_SOURCE_DIR +
+                          "/tests/data/app/tiny.toml --duration 5 --fps 1.4 -o " + out + " > " + out + ".log 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const Decoded d = decode(out);
+  EXPECT_EQ(d.frames.size(), 7u);
+  EXPECT_NEAR(av_q2d(d.frameRate), 1.4, 1e-9);
+  EXPECT_NEAR(d.durationSeconds, 5.0, 1e-3);
+}
 
 TEST_F(VideoTest, FaststartPutsMoovBeforeMdat) {
   const std::string path = (dir / "fs.mp4").string();

@@ -144,18 +144,39 @@ std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t
 BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integrator, double horizon,
                             const ParameterScale& scale) {
   BodyStability out;
-  for (const RowBound& r : rows) {
+  struct Rates {
+    double omega, gamma;
+    std::size_t row;
+  };
+  std::vector<Rates> rates(rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const RowBound& r = rows[i];
     const double w2 =
         scale.strutStiffness * r.strutStiffness + scale.hingeStiffness * r.hingeStiffness + scale.gasStiffness * r.gasStiffness;
     const double gamma = scale.strutDamping * r.strutDamping + scale.hingeDamping * r.hingeDamping + r.drag;
-    const double omega = std::sqrt(w2);
-    out.omegaMax = std::max(out.omegaMax, omega);
+    rates[i] = {std::sqrt(w2), gamma, i};
+    out.omegaMax = std::max(out.omegaMax, rates[i].omega);
     out.gammaMax = std::max(out.gammaMax, gamma);
-    // Rows dominated by another row in both rates cannot limit the step.
-    const double h = criticalStep(integrator, omega, gamma, horizon);
-    if (h < out.dtMax) {
+  }
+  // A row dominated by another in both rates cannot limit the step, so only the rows on the
+  // front (no other row both stiffer and more damped) are solved for their critical step: a
+  // handful instead of every vertex (suggest on 1000 bodies took longer than running them).
+  // Among equal rates the lowest row comes first and alone stays, as in a scan of every row.
+  std::sort(rates.begin(), rates.end(), [](const Rates& a, const Rates& b) {
+    if (a.omega != b.omega) return a.omega > b.omega;
+    if (a.gamma != b.gamma) return a.gamma > b.gamma;
+    return a.row < b.row;
+  });
+  double frontGamma = -1.0;
+  std::size_t bestRow = rows.size();
+  for (const Rates& r : rates) {
+    if (!(r.gamma > frontGamma)) continue;
+    frontGamma = r.gamma;
+    const double h = criticalStep(integrator, r.omega, r.gamma, horizon);
+    if (h < out.dtMax || (h == out.dtMax && r.row < bestRow)) {
       out.dtMax = h;
-      out.vertex = r.vertex;
+      bestRow = r.row;
+      out.vertex = rows[r.row].vertex;
     }
   }
   return out;

@@ -9,6 +9,7 @@ packages=(
   libtomlplusplus-dev    # scene files
   libcli11-dev           # command line
   libmeshoptimizer-dev   # mesh simplification
+  libcgal-dev            # simulation proxies: alpha wrapping + remeshing (header-only, GPL-3+)
   libosmesa6-dev         # offscreen OpenGL (Mesa llvmpipe)
   libglm-dev             # camera and transform maths for the renderer
   libstb-dev             # stb_image_write (PNG), stb_truetype (overlay text)

@@ -186,7 +186,8 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   }
 
   const long frames = std::max(1L, std::lround(scene.duration * scene.render.fps));
-  const std::size_t bytes = static_cast<std::size_t>(scene.render.width) * static_cast<std::size_t>(scene.render.height) * 4;
+  const std::size_t bytes =
+      static_cast<std::size_t>(scene.render.width) * static_cast<std::size_t>(scene.render.height) * 4;
   const bool serial = envFlag("SPRINGY_RENDER_SERIAL");
 
   Progress progress(scene.name, frames);
@@ -338,7 +339,8 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
               wall, n / wall, static_cast<double>(simNs.load()) / 1e6 / n,
               rt.totalRenderMs / static_cast<double>(rt.frames), rt.totalReadbackMs / static_cast<double>(rt.readbacks),
               et.totalConvertMs / static_cast<double>(et.frames), et.totalEncodeMs / static_cast<double>(et.frames),
-              serial ? "one thread, in sequence" : "simulate, render + read back, convert + encode overlap on 3 threads");
+              serial ? "one thread, in sequence"
+                     : "simulate, render + read back, convert + encode overlap on 3 threads");
   if (rs.profilePasses) {
     std::printf("  render passes per frame (glFinish after each):");
     for (std::size_t p = 0; p < render::kRenderPassCount; ++p)

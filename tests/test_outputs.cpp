@@ -53,6 +53,7 @@ class Springy {
  public:
   struct Options {
     rlim_t fileSizeLimit = RLIM_INFINITY;  // RLIMIT_FSIZE in bytes: a "full disk" without mounting
+    bool ignoreXfsz = false;               // start with SIGXFSZ ignored (`trap '' XFSZ`)
     bool closedStdout = false;             // stdout a pipe whose reader has gone
   };
 
@@ -73,6 +74,7 @@ class Springy {
       // The default dispositions, whatever the test runner inherited (nohup): springy must set its
       // own. Only async-signal-safe calls between fork and exec.
       for (int s : {SIGHUP, SIGINT, SIGTERM, SIGPIPE, SIGXFSZ}) ::signal(s, SIG_DFL);
+      if (options.ignoreXfsz) ::signal(SIGXFSZ, SIG_IGN);
       if (options.fileSizeLimit != RLIM_INFINITY) {
         const rlimit limit{options.fileSizeLimit, options.fileSizeLimit};
         ::setrlimit(RLIMIT_FSIZE, &limit);
@@ -191,13 +193,14 @@ class OutputTest : public ::testing::Test {
 // --- 1. A full disk: every write is checked, nothing truncated is committed. ---------------
 
 TEST_F(OutputTest, FramesOnAFullDiskFailAndKeepTheOldStill) {
-  // RLIMIT_FSIZE makes writes past 2 KiB fail with EFBIG, as ENOSPC would on a full disk
-  // (springy ignores SIGXFSZ, which would otherwise kill it). A 320x240 still is larger.
+  // RLIMIT_FSIZE makes writes past 2 KiB fail with EFBIG, as ENOSPC would on a full disk; with
+  // SIGXFSZ ignored from the start, as springy had it, the unchecked PNG writer committed the
+  // truncated still and exited 0. A 320x240 still is larger than 2 KiB.
   const fs::path still = dir_ / "tiny_t000.00.png";
   writeFile(still, "a still from before");
   const Result s = run({"frames", kTiny, "--times", "0,0.5", "--width", "320", "--height", "240", "-o",
-                         dir_.string()},
-                        {.fileSizeLimit = 2048});
+                        dir_.string()},
+                       {.fileSizeLimit = 2048, .ignoreXfsz = true});
   EXPECT_EQ(s.status, 1) << s.output;
   EXPECT_TRUE(contains(s.output, still.string() + ": writing failed: File too large")) << s.output;
   EXPECT_EQ(readFile(still), "a still from before");
@@ -207,13 +210,15 @@ TEST_F(OutputTest, FramesOnAFullDiskFailAndKeepTheOldStill) {
 TEST_F(OutputTest, RenderOnAFullDiskFailsAndLeavesNoFile) {
   const fs::path video = dir_ / "tiny.mp4";
   const Result s = run({"render", kTiny, "--width", "320", "--height", "240", "-o", video.string()},
-                        {.fileSizeLimit = 2048});
+                       {.fileSizeLimit = 2048, .ignoreXfsz = true});
   EXPECT_EQ(s.status, 1) << s.output;
   EXPECT_TRUE(contains(s.output, video.string() + ": writing the video failed")) << s.output;
   EXPECT_TRUE(contains(s.output, "File too large")) << s.output;
   EXPECT_TRUE(names(dir_).empty()) << listing(dir_);
 }
 
+// Here SIGXFSZ has its default action (kill): springy ignores it itself, so the failed write is
+// reported and the temporary file removed.
 TEST_F(OutputTest, TraceOnAFullDiskFailsAndLeavesNoFile) {
   const fs::path trace = dir_ / "trace.csv";
   const Result s = run({"check", kTiny, "--trace", trace.string()}, {.fileSizeLimit = 512});
@@ -469,7 +474,7 @@ TEST_F(OutputTest, OutOfRangeOptionsAreErrorsNamingThem) {
   EXPECT_TRUE(names(dir_).empty()) << listing(dir_);
   // The limits themselves are fine.
   const Result s = run({"frames", kTiny, "--times", "0", "--width", "16", "--height", "16", "--fps", "240", "-o",
-                         dir_.string()});
+                        dir_.string()});
   EXPECT_EQ(s.status, 0) << s.output;
 }
 

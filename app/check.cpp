@@ -1,5 +1,6 @@
 // `springy check`: runs scenes headlessly under the stability monitor and reports per body.
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -41,7 +42,7 @@ int runCheck(const CheckOptions& options) {
   std::unique_ptr<AtomicFile> traceFile;
   std::ofstream trace;
   if (!options.trace.empty()) {
-    traceFile = std::make_unique<AtomicFile>(options.trace);
+    traceFile = std::make_unique<AtomicFile>(options.trace, options.scenes);  // never over a scene
     trace.open(traceFile->temporaryPath());
     writeTraceHeader(trace);
   }
@@ -153,7 +154,7 @@ int runCheck(const CheckOptions& options) {
   }
   if (traceFile) {
     trace.close();
-    if (!trace) throw Error(options.trace + ": writing the trace failed");
+    if (!trace) throw Error(options.trace + ": writing the trace failed: " + errorText(errno));
     traceFile->commit();
   }
   return failures == 0 ? 0 : 1;

@@ -282,16 +282,9 @@ double measuredOrder(const std::vector<Point>& points, const std::string& name, 
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
-// The study's output directory, created when missing. Throws springy::Error naming it (an existing
-// file of that name, no permission) instead of std::filesystem's uncaught exception.
-void makeOutputDirectory(const fs::path& out) {
-  std::error_code error;
-  if (fs::exists(out, error) && !fs::is_directory(out, error)) {
-    throw Error(out.string() + ": exists and is not a directory; -o names the study's output directory");
-  }
-  fs::create_directories(out, error);
-  if (error) throw Error(out.string() + ": cannot create the output directory: " + error.message());
-}
+// The study's output directory, created when missing; an existing file of that name, or no
+// permission, is a springy::Error naming it (std::filesystem's exception went uncaught).
+void makeOutputDirectory(const fs::path& out) { makeDirectories(out.string(), "-o"); }
 
 int runAccuracy(const StudyOptions& o) {
   const fs::path out = o.output;

@@ -243,6 +243,16 @@ TEST_F(BadCommandLine, StudyRefusesZeroRepeatsAndMissingScenes) {
   EXPECT_EQ(kept, "keep me");
 }
 
+TEST_F(BadCommandLine, CheckNeverWritesItsTraceOverTheScene) {
+  const std::string s = scene("shape = \"icosphere\"\nsubdivisions = 1");
+  const auto before = fs::file_size(s);
+  const CommandResult r = runSpringy("check " + s + " --duration 0.1 --trace " + s);
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_HAS(r.output, s);
+  EXPECT_EQ(fs::file_size(s), before);
+  EXPECT_EQ(files(), std::vector<std::string>{"scene.toml"});
+}
+
 // Reproduction 7: --substeps auto picked 1 substep for bunny_light, whose impacts need its own 16.
 TEST_F(BadCommandLine, SubstepsAutoNeverLowersTheScenesOwnCount) {
   const std::string s = scene("shape = \"icosphere\"\nsubdivisions = 1\nstrut_period = 0.1", "dt = 0.004\nsubsteps = 7");

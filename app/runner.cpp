@@ -13,6 +13,9 @@ namespace springy {
 
 SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise) {
   SceneDesc scene = loadScene(path);
+  for (const BodyDesc& b : scene.bodies) {
+    if (!b.note.empty()) std::cerr << "springy: " << b.source << ": body '" << b.name << "': " << b.note << "\n";
+  }
   if (overrides.integrator && !parseIntegrator(*overrides.integrator, scene.integrator)) {
     throw Error("--integrator: '" + *overrides.integrator + "' is not one of: " + integratorNames());
   }

@@ -7,6 +7,7 @@
 // memory follows are bounded too, and checked before anything is allocated for them.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -21,6 +22,9 @@ constexpr std::uint64_t kMaxSceneVertices = 1u << 22;       // 4.2 M vertices in
 constexpr std::uint64_t kMaxAllPairsVertices = 4096;        // model = "all_pairs": 8.4 M struts
 constexpr double kMaxSteps = 1e9;                           // steps in one run (duration / (dt / substeps))
 constexpr int kMaxSubsteps = 100000;
+constexpr int kMaxProxyVertices = 1 << 20;                  // proxy_vertices
+// proxy = "auto" wraps a mesh of more vertices than this (far finer than a body needs).
+constexpr std::size_t kProxyAutoMaxVertices = 20000;
 
 // Ranges of body parameters that keep every derived constant finite and positive.
 constexpr double kMinMass = 1e-9, kMaxMass = 1e9;           // [kg]

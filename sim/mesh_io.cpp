@@ -590,19 +590,27 @@ bool orientOutward(TriMesh& mesh) {
   return true;
 }
 
-TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance) {
+TriMesh readWeldedMesh(const std::string& path, double relativeWeldTolerance) {
   const TriMesh raw = readMeshFile(path);
   if (auto stray = findStrayVertex(raw)) throw Error(path + ": " + *stray);
-  const double diagonal = boundsDiagonal(raw.positions);
-  TriMesh mesh = weldVertices(raw, relativeWeldTolerance * diagonal);
+  return weldVertices(raw, relativeWeldTolerance * boundsDiagonal(raw.positions));
+}
+
+void finishClosedMesh(TriMesh& mesh, const std::string& path) {
   if (auto problem = findManifoldProblem(mesh)) {
     throw Error(path + ": " + *problem);
   }
   orientOutward(mesh);
   // A closed manifold can still enclose nothing (two coincident sheets); a body needs volume.
+  const double diagonal = boundsDiagonal(mesh.positions);
   if (centredVolume(mesh) <= kZeroVolumeFactor * diagonal * diagonal * diagonal) {
     throw Error(path + ": the mesh encloses no volume");
   }
+}
+
+TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance) {
+  TriMesh mesh = readWeldedMesh(path, relativeWeldTolerance);
+  finishClosedMesh(mesh, path);
   return mesh;
 }
 

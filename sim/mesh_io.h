@@ -52,9 +52,15 @@ std::optional<std::string> findStrayVertex(const TriMesh& mesh);
 // Returns true if it flipped.
 bool orientOutward(TriMesh& mesh);
 
-// readMeshFile + weldVertices(tolerance relative to the bounding-box diagonal) + validation +
-// orientOutward. Throws springy::Error "PATH: <problem>" when the mesh is not usable as a body
-// (including a closed surface that encloses no volume).
+// readMeshFile + findStrayVertex + weldVertices(tolerance relative to the bounding-box diagonal).
+// Throws springy::Error "PATH: <problem>".
+TriMesh readWeldedMesh(const std::string& path, double relativeWeldTolerance = 1e-6);
+
+// Validation (findManifoldProblem) + orientOutward + a positive enclosed volume, on a welded
+// mesh read from `path`. Throws springy::Error "PATH: <problem>" when it is not usable as a body.
+void finishClosedMesh(TriMesh& mesh, const std::string& path);
+
+// readWeldedMesh + finishClosedMesh.
 TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance = 1e-6);
 
 // Simplifies a closed mesh to about `targetVertices` vertices with meshoptimizer, keeping it a

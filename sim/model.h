@@ -51,6 +51,7 @@ enum class MassDistribution { AngleWeightedArea, Uniform };
 struct BodyDesc {
   std::string name;
   std::string source;  // where it was described, e.g. "scene.toml:12:1: [[body]] #2" (for messages)
+  std::string note;    // what loading did that the user should know (a proxy built), or empty
   TriMesh mesh;  // rest shape, already scaled, rotated and placed in the world
   Vec3 velocity;  // initial velocity of every vertex [m/s]
   Vec3 angularVelocity;  // initial spin about the centroid [rad/s]

@@ -10,6 +10,7 @@
 #include "sim/error.h"
 #include "sim/limits.h"
 #include "sim/mesh_io.h"
+#include "sim/proxy.h"
 #include "sim/shapes.h"
 
 namespace springy {
@@ -265,8 +266,25 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
       const toml::node* n = r.get("mesh");
       if (!n || !n->is_string()) r.failHere("shape = \"mesh\" needs mesh = \"FILE\" (relative to the scene file)");
       const std::string file = resolvePath(path, n->as_string()->get());
+      const std::string proxy = r.choice("proxy", "auto", {"auto", "none", "always"});
+      const int proxyVertices = r.integer("proxy_vertices", 0, 4, kMaxProxyVertices);
       try {
-        mesh = loadClosedMesh(file);
+        mesh = readWeldedMesh(file);
+        // auto: a mesh that is not a closed manifold, or is badly shaped or far finer than a
+        // body needs, is simulated through a proxy that wraps it (sim/proxy.h).
+        std::optional<std::string> reason;
+        if (proxy == "auto") reason = needsProxy(mesh, kProxyAutoMaxVertices);
+        if (proxy == "always") reason = "proxy = \"always\"";
+        if (reason) {
+          ProxyOptions options;
+          options.targetVertices = proxyVertices > 0 ? static_cast<std::size_t>(proxyVertices)
+                                                     : std::clamp<std::size_t>(mesh.positions.size(), 162, 2562);
+          const ProxyResult built = buildProxy(mesh, options);
+          mesh = built.mesh;
+          b.note = "simulated through a proxy (" + *reason + "): " + built.summary;
+        } else {
+          finishClosedMesh(mesh, file);
+        }
       } catch (const Error& e) {
         r.fail(*n, "mesh", e.what());
       }

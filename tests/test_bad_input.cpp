@@ -22,6 +22,7 @@
 #include "sim/error.h"
 #include "sim/limits.h"
 #include "sim/mesh_io.h"
+#include "sim/proxy.h"
 #include "sim/scene.h"
 #include "sim/shapes.h"
 
@@ -182,6 +183,27 @@ TEST_F(BadInput, BadBodyValuesNameTheirKeyAndLine) {
   const std::string message = errorOf([&] { buildModel(desc); });
   EXPECT_HAS(message, tiny + ":4:1: [[body]] #1: body 'body 1': triangle");
   EXPECT_HAS(message, "has zero area");
+}
+
+// Issue 14: an open mesh is no longer refused: proxy = "auto" simulates it through a closed proxy
+// (sim/proxy.h) and says so; proxy = "none" keeps the strict validation and its located error.
+TEST_F(BadInput, AnOpenMeshIsSimulatedThroughAProxyUnlessProxyIsNone) {
+  const std::string hole = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/meshes/cube_hole.obj";
+  const SceneDesc desc = loadScene(scene("shape = \"mesh\"\nmesh = \"" + hole + "\"\nproxy_vertices = 300"));
+  EXPECT_HAS(desc.bodies[0].note, "simulated through a proxy (edge (4, 5) belongs to 1 triangle: the mesh has a hole)");
+  EXPECT_FALSE(findManifoldProblem(desc.bodies[0].mesh));
+  EXPECT_NEAR(static_cast<double>(desc.bodies[0].mesh.positions.size()), 300.0, 30.0);
+  EXPECT_GT(buildModel(desc).bodies[0].restVolume, 0.9);  // the unit cube, wrapped
+  EXPECT_HAS(errorOf([&] { loadScene(scene("shape = \"mesh\"\nmesh = \"" + hole + "\"\nproxy = \"none\"")); }),
+             "cube_hole.obj: edge (4, 5) belongs to 1 triangle: the mesh has a hole");
+  // A good closed mesh is simulated as it is, with no note.
+  const std::string cube = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/meshes/cube.stl";
+  const SceneDesc good = loadScene(scene("shape = \"mesh\"\nmesh = \"" + cube + "\"\nproxy = \"auto\""));
+  EXPECT_EQ(good.bodies[0].note, "");
+  EXPECT_EQ(good.bodies[0].mesh.positions.size(), 8u);
+  const CommandResult r = runSpringy("check " + scene("shape = \"mesh\"\nmesh = \"" + hole + "\"") + " --duration 0.1");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_HAS(r.output, "body 'body 1': simulated through a proxy");
 }
 
 // Found while writing these tests: a body placed half inside the ground blew up at once, and the

@@ -18,6 +18,10 @@ constexpr std::uintmax_t kMaxSceneFileBytes = 16u << 20;    // 16 MiB of TOML
 constexpr std::uintmax_t kMaxMeshFileBytes = 256u << 20;    // 256 MiB per mesh file
 constexpr std::uint64_t kMaxMeshVertices = 1u << 24;        // 16.7 M vertices per mesh file
 constexpr std::uint64_t kMaxMeshTriangles = 1u << 25;       // 33.5 M triangles per mesh file
+// A mesh file is parsed (by assimp) in a child process limited to this much time and address
+// space: a corrupt file that crashes, hangs or floods the parser is an error, never springy's end.
+constexpr unsigned kMeshReadSeconds = 120;
+constexpr unsigned long kMeshReadBytes = 8ul << 30;         // 8 GiB
 constexpr std::uint64_t kMaxSceneVertices = 1u << 22;       // 4.2 M vertices in all bodies (~2 GB of model)
 constexpr std::uint64_t kMaxAllPairsVertices = 4096;        // model = "all_pairs": 8.4 M struts
 constexpr double kMaxSteps = 1e9;                           // steps in one run (duration / (dt / substeps))

@@ -1,5 +1,9 @@
 #include "sim/mesh_io.h"
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <meshoptimizer.h>
@@ -8,7 +12,10 @@
 #include <array>
 #include <assimp/Importer.hpp>
 #include <cmath>
+#include <cerrno>
+#include <csignal>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
 #include <initializer_list>
 #include <sstream>
@@ -193,7 +200,7 @@ void checkPlyCounts(const std::string& path, std::uintmax_t fileSize) {
     } else if (keyword == "element") {
       closeElement();
       words >> element >> count;
-      if (!words) return;  // malformed: assimp reports it
+      if (!words) throw Error(path + ": the PLY header's line '" + line + "' is not 'element NAME COUNT'");
       elementBytes = 0;
     } else if (keyword == "property" && !element.empty()) {
       std::string type;
@@ -228,6 +235,8 @@ void checkPlyCounts(const std::string& path, std::uintmax_t fileSize) {
       return;
     }
   }
+  // assimp's PLY reader loops forever on a header without its end (found by the fuzzer).
+  throw Error(path + ": the PLY header has no end_header line: the file is truncated or not PLY");
 }
 
 // Assimp post-processes what its importers produced without checking it first: a truncated file
@@ -263,9 +272,10 @@ void checkFaces(const aiScene& scene, const std::string& path) {
 
 }  // namespace
 
-TriMesh readMeshFile(const std::string& path) {
-  const std::uintmax_t fileSize = checkInputFile(path, kMaxMeshFileBytes, "mesh file");
-  checkPlyCounts(path, fileSize);
+namespace {
+
+// The reading itself, with assimp, in the calling process.
+TriMesh readWithAssimp(const std::string& path) {
   Assimp::Importer importer;
   // Validation, then (after our own checks) triangulation only: welding is done by
   // weldVertices, deterministically and with our tolerance.
@@ -302,6 +312,112 @@ TriMesh readMeshFile(const std::string& path) {
     }
   }
   return out;
+}
+
+bool writeAll(int fd, const void* data, std::size_t size) {
+  const auto* bytes = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd, bytes, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    bytes += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+bool readAll(int fd, void* data, std::size_t size) {
+  auto* bytes = static_cast<char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::read(fd, bytes, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    bytes += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+// The child's side: reads with assimp and sends the mesh (status 0) or the error (status 1).
+[[noreturn]] void readInChild(const std::string& path, int fd) {
+  ::alarm(kMeshReadSeconds);  // a hang ends as SIGALRM, which the parent reports
+#if !defined(__SANITIZE_ADDRESS__) && !defined(SPRINGY_FUZZING)
+  const rlimit memory{kMeshReadBytes, kMeshReadBytes};  // sanitizers reserve terabytes of address space
+  ::setrlimit(RLIMIT_AS, &memory);
+#endif
+  bool ok = true;
+  try {
+    const TriMesh mesh = readWithAssimp(path);
+    const uint8_t status = 0;
+    const uint64_t counts[2] = {mesh.positions.size(), mesh.triangles.size()};
+    ok = writeAll(fd, &status, 1) && writeAll(fd, counts, sizeof counts) &&
+         writeAll(fd, mesh.positions.data(), mesh.positions.size() * sizeof(Vec3)) &&
+         writeAll(fd, mesh.triangles.data(), mesh.triangles.size() * sizeof(Triangle));
+  } catch (const std::exception& e) {
+    const uint8_t status = 1;
+    const std::string message = dynamic_cast<const Error*>(&e) ? e.what() : path + ": cannot read mesh file: " + e.what();
+    const uint64_t size = message.size();
+    ok = writeAll(fd, &status, 1) && writeAll(fd, &size, sizeof size) && writeAll(fd, message.data(), message.size());
+  }
+  ::_exit(ok ? 0 : 3);  // no atexit handlers or destructors of the parent's objects
+}
+
+}  // namespace
+
+TriMesh readMeshFile(const std::string& path) {
+  const std::uintmax_t fileSize = checkInputFile(path, kMaxMeshFileBytes, "mesh file");
+  checkPlyCounts(path, fileSize);
+  // assimp is a large parser of many formats, and a corrupt file can crash it, hang it or make
+  // it allocate without bound (the fuzzer found segmentation faults in its importers). It runs
+  // in a child process with a time and memory limit; whatever happens there, the parent gets a
+  // mesh or an error naming the file.
+  int fds[2];
+  if (::pipe(fds) != 0) throw Error(path + ": cannot read mesh file: pipe: " + std::strerror(errno));
+  const pid_t child = ::fork();
+  if (child < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw Error(path + ": cannot read mesh file: fork: " + std::strerror(errno));
+  }
+  if (child == 0) {
+    ::close(fds[0]);
+    readInChild(path, fds[1]);
+  }
+  ::close(fds[1]);
+  uint8_t status = 2;
+  TriMesh out;
+  std::string message;
+  if (readAll(fds[0], &status, 1)) {
+    uint64_t counts[2] = {0, 0};
+    if (status == 0 && readAll(fds[0], counts, sizeof counts) && counts[0] <= kMaxMeshVertices &&
+        counts[1] <= kMaxMeshTriangles) {
+      out.positions.resize(counts[0]);
+      out.triangles.resize(counts[1]);
+      if (!readAll(fds[0], out.positions.data(), counts[0] * sizeof(Vec3)) ||
+          !readAll(fds[0], out.triangles.data(), counts[1] * sizeof(Triangle))) {
+        status = 2;
+      }
+    } else if (status == 1 && readAll(fds[0], counts, sizeof(uint64_t)) && counts[0] < (1u << 20)) {
+      message.resize(counts[0]);
+      if (!readAll(fds[0], message.data(), message.size())) status = 2;
+    } else {
+      status = 2;
+    }
+  }
+  ::close(fds[0]);
+  int wait = 0;
+  while (::waitpid(child, &wait, 0) < 0 && errno == EINTR) {
+  }
+  if (status == 1) throw Error(message);
+  if (status == 0 && WIFEXITED(wait) && WEXITSTATUS(wait) == 0) return out;
+  if (WIFSIGNALED(wait) && WTERMSIG(wait) == SIGALRM) {
+    throw Error(path + ": cannot read mesh file: reading took longer than " + std::to_string(kMeshReadSeconds) +
+                " s (the file is corrupt, or too large)");
+  }
+  throw Error(path + ": cannot read mesh file: the reader (assimp) failed on it (" +
+              (WIFSIGNALED(wait) ? std::string("signal ") + std::to_string(WTERMSIG(wait))
+                                 : "exit status " + std::to_string(WEXITSTATUS(wait))) +
+              ", or out of memory): the file is corrupt or not a mesh assimp reads");
 }
 
 TriMesh weldVertices(const TriMesh& mesh, double tolerance) {

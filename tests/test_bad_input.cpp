@@ -121,6 +121,19 @@ TEST_F(BadInput, TruncatedPlyFilesAreErrorsNamingTheFileAtEveryCut) {
   }
 }
 
+// Found by the fuzzer (fuzz/): assimp's PLY reader loops forever, or crashes, on a header that
+// never ends. Every mesh file is also parsed in a child process with a time and memory limit
+// (readMeshFile), so that what assimp does on a corrupt file can only end in an error.
+TEST_F(BadInput, APlyHeaderWithoutItsEndIsAnErrorNotAHang) {
+  for (const std::string& text : {std::string("ply\nformat ascii 1.0\n"), std::string("ply\nformat ascii"),
+                                  std::string("ply\nformat binary_little_endi\xd7\\\xbf\x90\x10\x85>\xbe\xb3")}) {
+    const std::string path = write("open_header.ply", text);
+    EXPECT_HAS(errorOf([&] { readMeshFile(path); }), "the PLY header has no end_header line");
+  }
+  const std::string path = write("bad_element.ply", "ply\nformat ascii 1.0\nelement vertex many\nend_header\n");
+  EXPECT_HAS(errorOf([&] { readMeshFile(path); }), "'element vertex many' is not 'element NAME COUNT'");
+}
+
 // Reproduction 2: a 200-byte file whose header claims 2e9 vertices took all memory.
 TEST_F(BadInput, APlyHeaderClaimingMoreThanTheFileHoldsIsRefusedBeforeReading) {
   const std::string huge = write("huge.ply",

@@ -2,6 +2,8 @@
 // what is wrong (file, line, key, vertex), a non-zero exit status, and no crash, hang or runaway
 // memory. The readers are also fuzzed (fuzz/); these are the cases found by hand.
 #include <gtest/gtest.h>
+
+#include "error_of.h"
 #include <signal.h>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -33,16 +35,7 @@ namespace fs = std::filesystem;
 using test::CommandResult;
 using test::runSpringy;
 
-template <typename F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected springy::Error";
-  return {};
-}
+using test::errorOf;
 
 #define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << (text)
 

@@ -1,6 +1,8 @@
 // Tests for mesh import, welding, validation, orientation and simplification (sim/mesh_io.h).
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -18,17 +20,7 @@ std::string meshPath(const std::string& name) {
   return std::string(SPRINGY_SOURCE_DIR) + "/tests/data/meshes/" + name;
 }
 
-// The message of the springy::Error that `f` throws; fails the test if it throws nothing.
-template <typename F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected springy::Error";
-  return {};
-}
+using test::errorOf;
 
 // The first "edge (a, b)" in a message.
 std::optional<std::pair<uint32_t, uint32_t>> edgeIn(const std::string& message) {

@@ -2,6 +2,8 @@
 // meshes into closed, outward, manifold, well-shaped bodies, and needsProxy's verdicts.
 #include <gtest/gtest.h>
 
+#include "error_of.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -140,16 +142,7 @@ ProxyResult checkedProxy(const char* name, const TriMesh& input, const ProxyOpti
   return result;
 }
 
-template <typename F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected springy::Error";
-  return {};
-}
+using test::errorOf;
 
 bool contains(const std::optional<std::string>& text, const std::string& part) {
   return text && text->find(part) != std::string::npos;

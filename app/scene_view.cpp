@@ -59,13 +59,27 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
   // Bodies: topology once, body-local indices.
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     const BodyInfo& info = model.bodies[b];
+    const BodyDesc& desc = scene.bodies[b];
     std::vector<uint32_t> indices;
+    bodyVertexCounts_.push_back(info.vertexCount);
+    drawBindings_.emplace_back();
+    if (!desc.drawBinding.empty()) {
+      // The user's own mesh over the proxy: its topology, its vertices placed from the proxy's.
+      Embedding& binding = drawBindings_.back();
+      binding = desc.drawBinding;
+      for (Triangle& t : binding.corners) {
+        for (uint32_t& v : t) v = info.modelVertex[v] - info.firstVertex;
+      }
+      for (const Triangle& t : desc.drawMesh.triangles) indices.insert(indices.end(), t.begin(), t.end());
+      bodyMeshes_.push_back(renderer_.addDynamicMesh(static_cast<uint32_t>(desc.drawMesh.positions.size()), indices,
+                                                     toMaterial(scene.bodyMaterials[b])));
+      continue;
+    }
     indices.reserve(static_cast<std::size_t>(info.faceCount) * 3);
     for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
       for (uint32_t v : model.faces[f]) indices.push_back(v - info.firstVertex);
     }
     bodyMeshes_.push_back(renderer_.addDynamicMesh(info.vertexCount, indices, toMaterial(scene.bodyMaterials[b])));
-    bodyVertexCounts_.push_back(info.vertexCount);
   }
   for (const PlaneDesc& p : scene.planes) {
     if (!p.visible) continue;
@@ -136,7 +150,14 @@ void SceneView::draw(const FrameSnapshot& snapshot) {
   std::size_t offset = 0;
   for (std::size_t b = 0; b < bodyMeshes_.size(); ++b) {
     const std::size_t n = 3 * static_cast<std::size_t>(bodyVertexCounts_[b]);
-    renderer_.updateDynamicMesh(bodyMeshes_[b], std::span<const float>(snapshot.positions).subspan(offset, n));
+    const std::span<const float> body = std::span<const float>(snapshot.positions).subspan(offset, n);
+    if (drawBindings_[b].empty()) {
+      renderer_.updateDynamicMesh(bodyMeshes_[b], body);
+    } else {
+      placed_.resize(3 * drawBindings_[b].size());
+      placeEmbedded(drawBindings_[b], body.data(), placed_.data());
+      renderer_.updateDynamicMesh(bodyMeshes_[b], placed_);
+    }
     offset += n;
   }
   if (scene_.render.overlay) {

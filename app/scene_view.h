@@ -36,6 +36,10 @@ class SceneView {
   render::Renderer renderer_;
   std::vector<render::MeshId> bodyMeshes_;
   std::vector<uint32_t> bodyVertexCounts_;
+  // Per body simulated through a proxy: the user's mesh bound to it (corners as the body's
+  // model-local vertex indices), drawn instead of the proxy; empty for the others.
+  std::vector<Embedding> drawBindings_;
+  std::vector<float> placed_;  // scratch: a drawn mesh's positions
   std::string integrator_;
   FrameSnapshot scratch_;  // for draw(world)
 };

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "sim/colliders.h"
+#include "sim/embedding.h"
 #include "sim/mesh.h"
 #include "sim/vec3.h"
 
@@ -52,6 +53,10 @@ struct BodyDesc {
   std::string name;
   std::string source;  // where it was described, e.g. "scene.toml:12:1: [[body]] #2" (for messages)
   std::string note;    // what loading did that the user should know (a proxy built), or empty
+  // When the body simulates a proxy: the mesh the user gave (world coordinates, its own topology),
+  // which is what is drawn, bound to the proxy (`mesh`) at rest. Empty otherwise.
+  TriMesh drawMesh;
+  Embedding drawBinding;
   TriMesh mesh;  // rest shape, already scaled, rotated and placed in the world
   Vec3 velocity;  // initial velocity of every vertex [m/s]
   Vec3 angularVelocity;  // initial spin about the centroid [rad/s]

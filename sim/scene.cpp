@@ -280,6 +280,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
           options.targetVertices = proxyVertices > 0 ? static_cast<std::size_t>(proxyVertices)
                                                      : std::clamp<std::size_t>(mesh.positions.size(), 162, 2562);
           const ProxyResult built = buildProxy(mesh, options);
+          b.drawMesh = std::move(mesh);
           mesh = built.mesh;
           b.note = "simulated through a proxy (" + *reason + "): " + built.summary;
         } else {
@@ -301,6 +302,10 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   const Transform transform = readTransform(r);
   for (Vec3& p : mesh.positions) p = transform.apply(p);
   b.mesh = std::move(mesh);
+  if (!b.drawMesh.positions.empty()) {
+    for (Vec3& p : b.drawMesh.positions) p = transform.apply(p);
+    b.drawBinding = bindToSurface(b.mesh, b.drawMesh.positions);
+  }
   b.velocity = r.vec3("velocity", {});
   b.angularVelocity = r.vec3("angular_velocity", {});
   b.model = r.choice("model", "springy", {"springy", "all_pairs"}) == "all_pairs" ? SpringModel::AllPairs

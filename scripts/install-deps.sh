@@ -20,6 +20,7 @@ packages=(
   libbenchmark-dev       # benchmarks
   libbullet-dev          # benchmarks: the peer comparison (Bullet soft bodies, bench/bullet)
   gnuplot-nox            # plots in the accuracy study
+  clang libclang-rt-14-dev llvm  # fuzzing (scripts/fuzz.sh): clang 14, libFuzzer and sanitizer runtimes, llvm-symbolizer
 )
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi

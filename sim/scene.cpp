@@ -328,8 +328,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   if (b.hingeDecay > 0.0) b.hingeDecay = r.inRange("hinge_decay", b.hingeDecay, kMinTime, kMaxTime);
   b.hingePeriod = r.number("hinge_period", b.hingePeriod);
   if (b.hingePeriod > 0.0) b.hingePeriod = r.inRange("hinge_period", b.hingePeriod, kMinTime, kMaxTime);
-  b.volumePeriod = r.has("volume_period") ? r.inRange("volume_period", 0.0, kMinTime, kMaxTime) : 0.0;
-  r.get("volume_period");
+  b.volumePeriod = r.optionalInRange("volume_period", kMinTime, kMaxTime).value_or(0.0);
   b.strutStiffness = r.optionalInRange("strut_stiffness", 0.0, kMaxConstant);
   b.strutDamping = r.optionalInRange("strut_damping", 0.0, kMaxConstant);
   b.hingeStiffness = r.optionalInRange("hinge_stiffness", 0.0, kMaxConstant);
@@ -477,10 +476,17 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
   }
   if (const toml::array* bodies = arrayOfTables(root, "body", path)) {
     top.get("body");
+    std::uint64_t vertices = 0;
     for (std::size_t i = 0; i < bodies->size(); ++i) {
       Material material;
       scene.bodies.push_back(readBody(*bodies->get(i)->as_table(), path, i, material));
       scene.bodyMaterials.push_back(material);
+      // Checked body by body, so that memory stops growing at the body that crosses the limit.
+      vertices += scene.bodies.back().mesh.positions.size();
+      if (vertices > kMaxSceneVertices) {
+        throw Error(scene.bodies.back().source + ": the bodies up to this one have " + std::to_string(vertices) +
+                    " vertices in all, more than the limit of " + std::to_string(kMaxSceneVertices));
+      }
     }
   }
   if (const toml::array* planes = arrayOfTables(root, "plane", path)) {
@@ -567,12 +573,6 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
   }
   top.finish();
   if (scene.bodies.empty()) throw Error(path + ": the scene has no [[body]]");
-  std::uint64_t vertices = 0;
-  for (const BodyDesc& b : scene.bodies) vertices += b.mesh.positions.size();
-  if (vertices > kMaxSceneVertices) {
-    throw Error(path + ": the bodies have " + std::to_string(vertices) + " vertices in all, more than the limit of " +
-                std::to_string(kMaxSceneVertices));
-  }
   if (auto problem = runSettingsProblem(scene)) {
     const toml::node* table = root.get("scene");
     throw Error((table ? location(path, table->source()) + ": [scene]" : path) + ": " + *problem);

@@ -147,6 +147,16 @@ TEST_F(BadInput, AllPairsOnAFineMeshIsRefusedAtItsKey) {
   EXPECT_HAS(message, "262146 vertices would make 34360131585 struts; it takes at most 4096");
 }
 
+TEST_F(BadInput, TheScenesVertexLimitStopsAtTheBodyThatCrossesIt) {
+  // 15 octahedron spheres of 262146 vertices fit in 4194304; the 16th crosses the limit (by 32).
+  std::string text;
+  for (int i = 0; i < 16; ++i) text += "[[body]]\nsubdivisions = 256\nposition = [" + std::to_string(3 * i) + ", 2, 0]\n";
+  const std::string path = write("many.toml", text);
+  const std::string message = errorOf([&] { loadScene(path); });
+  EXPECT_HAS(message, path + ":46:1: [[body]] #16: the bodies up to this one have 4194336 vertices in all");
+  EXPECT_HAS(message, "more than the limit of " + std::to_string(kMaxSceneVertices));
+}
+
 // Reproduction 11: misleading messages.
 TEST_F(BadInput, ADirectoryOrAPipeAsAFileIsNamedAsSuch) {
   fs::create_directories(dir_ / "meshdir");

@@ -1,9 +1,12 @@
 #include "sim/scene.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <sstream>
 #include <toml++/toml.h>
 
@@ -335,6 +338,9 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.hingeDamping = r.optionalInRange("hinge_damping", 0.0, kMaxConstant);
   // Pins: vertex indices or rules ("top", "bottom", "left", "right", "front", "back": the
   // extreme vertex along y, x or z), and pin_near = [[x, y, z], ...]: the nearest vertex.
+  // Each rule's vertex is found once however often it is named (a scan of every vertex per pin
+  // made 16 KB of rules take seconds on a fine sphere: found by the fuzzer).
+  std::array<std::optional<uint32_t>, 6> ruleVertex;
   if (const toml::node* n = r.get("pin")) {
     const auto* a = n->as_array();
     if (!a) r.fail(*n, "pin", "must be an array of vertex indices or rules, e.g. [\"top\"] or [0, 5]");
@@ -351,7 +357,9 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
             {"left", {0, false}}, {"front", {2, false}}, {"back", {2, true}}};
         auto it = std::find_if(rules.begin(), rules.end(), [&](auto& rule) { return rule.first == s->get(); });
         if (it == rules.end()) r.fail(item, "pin", "unknown rule '" + s->get() + "' (top, bottom, left, right, front, back)");
-        b.pinned.push_back(extremeVertex(b.mesh, it->second.first, it->second.second));
+        std::optional<uint32_t>& v = ruleVertex[static_cast<std::size_t>(it - rules.begin())];
+        if (!v) v = extremeVertex(b.mesh, it->second.first, it->second.second);
+        b.pinned.push_back(*v);
       } else {
         r.fail(item, "pin", "entries must be vertex indices or rule names");
       }
@@ -360,13 +368,36 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   if (const toml::node* n = r.get("pin_near")) {
     const auto* a = n->as_array();
     if (!a) r.fail(*n, "pin_near", "must be an array of points [[x, y, z], ...]");
+    // A point as far from every vertex as the centre of a sphere has all of them at nearly one
+    // distance, and any exact search examines them all: the count of points is what bounds it.
+    if (a->size() > kMaxPinNear) {
+      r.fail(*n, "pin_near", std::to_string(a->size()) + " points, more than the limit of " +
+                                 std::to_string(kMaxPinNear) + " (pin vertex indices instead)");
+    }
+    // The nearest vertex (the lowest index among equals) searched outward from the point's x in
+    // the vertices sorted by x: a few vertices per point instead of all of them.
+    const std::vector<Vec3>& x = b.mesh.positions;
+    std::vector<std::pair<double, uint32_t>> byX(x.size());
+    for (uint32_t i = 0; i < x.size(); ++i) byX[i] = {x[i].x, i};
+    std::sort(byX.begin(), byX.end());
     for (const toml::node& item : *a) {
       const Vec3 p = r.asVec3(item, "pin_near");
-      uint32_t best = 0;
-      for (uint32_t i = 1; i < b.mesh.positions.size(); ++i) {
-        if (lengthSquared(b.mesh.positions[i] - p) < lengthSquared(b.mesh.positions[best] - p)) best = i;
+      const auto start = std::lower_bound(byX.begin(), byX.end(), std::pair<double, uint32_t>{p.x, 0});
+      double best = std::numeric_limits<double>::infinity();
+      uint32_t bestIndex = 0;
+      auto consider = [&](uint32_t i) {
+        const double d = lengthSquared(x[i] - p);
+        if (d < best || (d == best && i < bestIndex)) {
+          best = d;
+          bestIndex = i;
+        }
+      };
+      for (auto it = start; it != byX.end() && (it->first - p.x) * (it->first - p.x) <= best; ++it) consider(it->second);
+      for (auto it = start; it != byX.begin() && (std::prev(it)->first - p.x) * (std::prev(it)->first - p.x) <= best;
+           --it) {
+        consider(std::prev(it)->second);
       }
-      b.pinned.push_back(best);
+      b.pinned.push_back(bestIndex);
     }
   }
   material = readMaterial(r, Material{{0.75, 0.2, 0.2}, 1.0, 48.0});

@@ -47,9 +47,13 @@ struct FramesOptions {
 };
 int runFrames(const FramesOptions& options);
 
-// The stability advisor on a loaded scene: with autoSubsteps sets scene.substeps to a safe
-// number and says so, otherwise warns when the step exceeds the estimated stable limit.
-void adviseTimeStep(const std::string& path, SceneDesc& scene, bool autoSubsteps, std::ostream& log);
+// The stability advisor on a loaded scene. Warn: warns when the step exceeds the estimated
+// stable limit. AutoSubsteps (--substeps auto): sets scene.substeps to a safe number. Default
+// (neither the scene nor the command line gave dt or substeps): the same with the margin
+// kImpactMargin that holds through impacts (the estimate is made at rest). Both say what they chose.
+enum class StepChoice { Warn, AutoSubsteps, Default };
+constexpr double kImpactMargin = 0.5;
+void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, std::ostream& log);
 
 struct SuggestOptions {
   std::vector<std::string> scenes;

@@ -35,7 +35,12 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     }
     scene.substeps = *overrides.substeps;
   }
-  if (advise) adviseTimeStep(path, scene, overrides.autoSubsteps, std::cerr);
+  if (advise) {
+    const StepChoice choice = overrides.autoSubsteps ? StepChoice::AutoSubsteps
+                              : !scene.stepGiven && !overrides.dt && !overrides.substeps ? StepChoice::Default
+                                                                                         : StepChoice::Warn;
+    adviseTimeStep(path, scene, choice, std::cerr);
+  }
   if (auto problem = runSettingsProblem(scene)) {
     throw Error(path + ": with the command line's settings, " + *problem);
   }

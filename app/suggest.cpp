@@ -35,7 +35,7 @@ double smallestStable(F stable, double lo, double hi) {
 
 }  // namespace
 
-void adviseTimeStep(const std::string& path, SceneDesc& scene, bool autoSubsteps, std::ostream& log) {
+void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, std::ostream& log) {
   const Model model = buildModel(scene);
   const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
   const BodyStability& b = r.bodies.empty() ? BodyStability{} : r.bodies[r.limitingBody];
@@ -45,9 +45,15 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, bool autoSubsteps
                 std::to_string(b.omegaMax) + " rad/s, damping rate " + std::to_string(b.gammaMax) +
                 " 1/s): its mass, periods or spring constants are out of proportion");
   }
-  if (!std::isfinite(r.dtMax)) return;
+  if (!std::isfinite(r.dtMax)) {
+    if (choice == StepChoice::Default) {
+      log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (the scene gives none; "
+          << integratorName(scene.integrator) << " is stable at any step on these springs)\n";
+    }
+    return;
+  }
   const int needed = safeSubsteps(scene.dt, r.dtMax, kSafety);
-  if (autoSubsteps) {
+  if (choice == StepChoice::AutoSubsteps) {
     // Never fewer than the scene's own: the estimate is made at rest, and a scene may need more
     // for its impacts (bunny_light's 16: with 1 substep its bunny's landing gains energy).
     const int own = scene.substeps;
@@ -58,6 +64,12 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, bool autoSubsteps
                                                 std::to_string(needed)
                                           : std::string())
         << ")\n";
+  } else if (choice == StepChoice::Default) {
+    scene.substeps = safeSubsteps(scene.dt, r.dtMax, kImpactMargin);
+    log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
+        << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << kImpactMargin
+        << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)
+        << " (body '" << body << "'), a margin for impacts\n";
   } else if (stepSize(scene) > r.dtMax) {
     log << "springy: warning: " << path << ": the step " << seconds(stepSize(scene))
         << " exceeds the estimated stable limit " << seconds(r.dtMax) << " of " << integratorName(scene.integrator)

@@ -136,4 +136,61 @@ void applyGasPressure(const Model& model, const double* overpressure, const Vert
   }
 }
 
+void MassMoments::add(const MassMoments& o) {
+  mass += o.mass;
+  first += o.first;
+  momentum += o.momentum;
+  angular += o.angular;
+  for (int k = 0; k < 6; ++k) second[k] += o.second[k];
+}
+
+MassMoments massMoments(const Model& model, std::size_t begin, std::size_t end, const Vec3& o, const Vec3* x,
+                        const Vec3* v) {
+  MassMoments s;
+  for (std::size_t i = begin; i < end; ++i) {
+    const double m = model.mass[i];
+    const Vec3 r = x[i] - o, mr = r * m;
+    s.mass += m;
+    s.first += mr;
+    s.momentum += v[i] * m;
+    s.angular += cross(mr, v[i]);
+    s.second[0] += mr.x * r.x, s.second[1] += mr.y * r.y, s.second[2] += mr.z * r.z;
+    s.second[3] += mr.x * r.y, s.second[4] += mr.x * r.z, s.second[5] += mr.y * r.z;
+  }
+  return s;
+}
+
+RigidMotion rigidMotion(const MassMoments& s, const Vec3& o) {
+  RigidMotion rigid;
+  if (!(s.mass > 0.0)) return rigid;
+  const Vec3 c = s.first / s.mass;  // centre of mass about o
+  rigid.center = o + c;
+  rigid.velocity = s.momentum / s.mass;
+  // Angular momentum and inertia about the centre of mass.
+  const Vec3 angular = s.angular - cross(c, s.momentum);
+  const double xx = s.second[0] - s.mass * c.x * c.x, yy = s.second[1] - s.mass * c.y * c.y,
+               zz = s.second[2] - s.mass * c.z * c.z, xy = s.second[3] - s.mass * c.x * c.y,
+               xz = s.second[4] - s.mass * c.x * c.z, yz = s.second[5] - s.mass * c.y * c.z;
+  const double trace = xx + yy + zz;
+  // I = trace(S) 1 - S, symmetric: solve I w = L by its adjugate.
+  const double a = trace - xx, b = -xy, cc = -xz, d = trace - yy, e = -yz, f = trace - zz;
+  const double A = d * f - e * e, B = cc * e - b * f, C = b * e - cc * d;
+  const double det = a * A + b * B + cc * C;
+  if (!(det > 1e-12 * trace * trace * trace)) return rigid;
+  const double D = a * f - cc * cc, E = b * cc - a * e, F = a * d - b * b;
+  rigid.spin = Vec3{A * angular.x + B * angular.y + C * angular.z, B * angular.x + D * angular.y + E * angular.z,
+                    C * angular.x + E * angular.y + F * angular.z} /
+               det;
+  return rigid;
+}
+
+void applyDeformationDamping(const Model& model, const RigidMotion* rigid, std::size_t begin, std::size_t end,
+                             const Vec3* x, const Vec3* v, Vec3* f) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const RigidMotion& r = rigid[model.body[i]];
+    if (r.rate == 0.0) continue;
+    f[i] -= (v[i] - r.at(x[i])) * (r.rate * model.mass[i]);
+  }
+}
+
 }  // namespace springy

@@ -71,4 +71,34 @@ VertexFaces vertexFaces(const Model& model);
 void applyGasPressure(const Model& model, const double* overpressure, const VertexFaces& around,
                       const Vec3* areaVectors, std::size_t begin, std::size_t end, Vec3* f);
 
+// Deformation damping (BodyInfo::deformationDamping): f_i = -c m_i (v_i - v - w x (x_i - p)) with
+// (v, w) the rigid motion that carries the body's momentum and angular momentum about its
+// centre of mass p (Mueller et al. 2007, "Position Based Dynamics", section 3.5, as a force).
+// Every deformation mode decays at c / 2 whatever the mesh, and the damping keeps momentum and
+// angular momentum and never adds energy: it is -c M times the mass-orthogonal projection of
+// the velocities off the rigid motions.
+//
+// Mass moments of vertices [begin, end) about a point o: the sums a rigid fit needs.
+struct MassMoments {
+  double mass = 0.0;
+  Vec3 first;          // sum m r
+  Vec3 momentum;       // sum m v
+  Vec3 angular;        // sum m r x v
+  double second[6] = {0, 0, 0, 0, 0, 0};  // sum m r r^T: xx, yy, zz, xy, xz, yz
+  void add(const MassMoments& o);
+};
+MassMoments massMoments(const Model& model, std::size_t begin, std::size_t end, const Vec3& o, const Vec3* x,
+                        const Vec3* v);
+struct RigidMotion {
+  Vec3 center, velocity, spin;  // p, v, w
+  double rate = 0.0;            // c [1/s]; 0: the body has no deformation damping
+  Vec3 at(const Vec3& x) const { return velocity + cross(spin, x - center); }
+};
+// The rigid motion carrying the moments taken about o (the spin is 0 for a body whose inertia
+// is singular, all its mass on a line).
+RigidMotion rigidMotion(const MassMoments& moments, const Vec3& o);
+// Adds the deformation damping of vertices [begin, end); rigid[b] for each vertex's body b.
+void applyDeformationDamping(const Model& model, const RigidMotion* rigid, std::size_t begin, std::size_t end,
+                             const Vec3* x, const Vec3* v, Vec3* f);
+
 }  // namespace springy

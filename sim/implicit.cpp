@@ -213,8 +213,11 @@ void ImplicitSolver::addBlock(Eigen::SparseMatrix<double>& m, const Block& blk, 
 void ImplicitSolver::assemble(const Model& model, const Vec3* x, const Vec3* v, bool definite) {
   std::fill(K_.valuePtr(), K_.valuePtr() + K_.nonZeros(), 0.0);
   std::fill(D_.valuePtr(), D_.valuePtr() + D_.nonZeros(), 0.0);
-  if (model.drag > 0.0) {
-    for (std::size_t i = 0; i < n_; ++i) addBlock(D_, diagonal_[i], Matrix3d::Identity(), -model.drag * model.mass[i]);
+  // Drag and the deformation damping's diagonal part -c m_i (its rigid-motion part, a rank-6
+  // coupling of the whole body, stays out of the matrix: Newton converges to the same step).
+  for (std::size_t i = 0; i < n_; ++i) {
+    const double rate = model.drag + model.bodies[model.body[i]].deformationDamping;
+    if (rate > 0.0) addBlock(D_, diagonal_[i], Matrix3d::Identity(), -rate * model.mass[i]);
   }
   Matrix3d kx, kv;
   for (std::size_t s = 0; s < model.struts.size(); ++s) {

@@ -188,25 +188,58 @@ void addBody(Model& model, const BodyDesc& desc) {
     return a;
   };
 
-  auto strutConstants = [&](uint32_t i, uint32_t j, double& k, double& d) {
+  // The body material (MaterialModel::Body): moduli from the periods at the body's size.
+  const bool bodyMaterial = desc.material == MaterialModel::Body;
+  if (bodyMaterial && desc.model == SpringModel::AllPairs) {
+    throw Error(where(desc) + ": the all-pairs model takes the element material (periods per strut)");
+  }
+  std::vector<double> faceArea(mesh.triangles.size());
+  double area = 0.0;
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    faceArea[f] = 0.5 * length(cross(mesh.positions[t[1]] - mesh.positions[t[0]], mesh.positions[t[2]] - mesh.positions[t[0]]));
+    area += faceArea[f];
+  }
+  if (bodyMaterial) {
+    const double density = desc.mass / area, scale = std::sqrt(area / (4 * kPi));
+    const double stretch = desc.stretchPeriod.value_or(kDefaultStretchPeriod * scale);
+    const double bend = desc.bendPeriod.value_or(kDefaultBendPeriod * scale);
+    info.membraneModulus = density * scale * scale * (2 * kPi / stretch) * (2 * kPi / stretch);
+    info.bendingModulus = bend > 0.0 ? density * std::pow(scale, 4) * (2 * kPi / bend) * (2 * kPi / bend) : 0.0;
+    info.deformationDamping = desc.deformationDecay > 0.0 ? 2.0 / desc.deformationDecay : 0.0;
+  }
+
+  // faces: the one or two faces beside the edge (the second is the first for a border edge).
+  auto strutConstants = [&](uint32_t i, uint32_t j, double rest, uint32_t face0, uint32_t face1, double& k, double& d) {
+    if (bodyMaterial) {
+      // A membrane of modulus Y: the edge's share of the area beside it (a third of each face,
+      // so the shares sum to the body's area) over its length squared; equal stretch e of
+      // every edge then stores 1/2 Y e^2 per unit area.
+      const double share = (faceArea[face0] + (face1 != face0 ? faceArea[face1] : 0.0)) / 3.0;
+      k = info.membraneModulus * share / (rest * rest);
+      d = 0.0;
+      return;
+    }
     const double mean = 0.5 * (m[i] + m[j]);
     k = desc.strutStiffness ? *desc.strutStiffness : stiffnessFromPeriod(mean, desc.strutPeriod);
     d = desc.strutDamping ? *desc.strutDamping : dampingFromDecay(mean, desc.strutDecay);
   };
-  auto addStrut = [&](uint32_t i, uint32_t j) {
+  auto addStrut = [&](uint32_t i, uint32_t j, uint32_t face0, uint32_t face1) {
     const double rest = length(mesh.positions[j] - mesh.positions[i]);
     if (!(rest > 1e-12 * size)) {
       throw Error(where(desc) + ": edge (" + std::to_string(i) + ", " + std::to_string(j) + ") has zero length");
     }
     Strut s{base + i, base + j, rest, 0.0, 0.0};
-    strutConstants(i, j, s.stiffness, s.damping);
+    strutConstants(i, j, rest, face0, face1, s.stiffness, s.damping);
     model.struts.push_back(s);
   };
 
-  const bool useHinges = desc.model == SpringModel::Springy && (desc.hingeStiffness || desc.hingePeriod > 0.0);
+  const bool useHinges =
+      desc.model == SpringModel::Springy &&
+      (bodyMaterial ? info.bendingModulus > 0.0 : (desc.hingeStiffness || desc.hingePeriod > 0.0));
   if (desc.model == SpringModel::AllPairs) {
     for (uint32_t i = 0; i < nv; ++i) {
-      for (uint32_t j = i + 1; j < nv; ++j) addStrut(i, j);
+      for (uint32_t j = i + 1; j < nv; ++j) addStrut(i, j, 0, 0);
     }
   } else {
     for (const DirectedEdge& e : edges) {
@@ -218,7 +251,7 @@ void addBody(Model& model, const BodyDesc& desc) {
                     std::to_string(e.to) + ") borders only triangle " + std::to_string(e.face));
       }
       if (e.from > e.to && twin) continue;
-      addStrut(e.from, e.to);
+      addStrut(e.from, e.to, e.face, twin ? twin->face : e.face);
       if (!useHinges || !twin) continue;
       Hinge h{{base + e.from, base + e.to, base + thirdVertex(e.face, e.from, e.to),
                base + thirdVertex(twin->face, e.from, e.to)},
@@ -233,6 +266,15 @@ void addBody(Model& model, const BodyDesc& desc) {
       h.restAngle = g.theta;
       h.minLever[0] = 0.2 * g.leverLeft;
       h.minLever[1] = 0.2 * g.leverRight;
+      if (bodyMaterial) {
+        // Discrete shells' weight |e|^2 / (A_1 + A_2); the factor 2 makes a flat mesh of
+        // equilateral triangles bent into a cylinder of radius R store 1/2 D / R^2 per unit area.
+        const double rest = length(x1 - x0);
+        h.stiffness = 2.0 * info.bendingModulus * rest * rest / (faceArea[e.face] + faceArea[twin->face]);
+        h.damping = 0.0;
+        model.hinges.push_back(h);
+        continue;
+      }
       const double mean = 0.5 * (m[e.from] + m[e.to]);
       const double r = 0.5 * (g.leverLeft + g.leverRight);  // at rest, once
       h.stiffness = desc.hingeStiffness ? *desc.hingeStiffness : torsionStiffnessFromPeriod(mean, r, desc.hingePeriod);

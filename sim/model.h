@@ -48,6 +48,32 @@ enum class SpringModel {
 
 enum class MassDistribution { AngleWeightedArea, Uniform };
 
+// How a body's stiffness and damping are given.
+enum class MaterialModel {
+  // The seed's (eq. 22-25): every strut and hinge gets its own period and decay time, as a mass
+  // on that one spring. A body's behaviour then changes with its mesh: for given periods the
+  // bending stiffness falls with the cube of the mesh spacing.
+  Element,
+  // A material of the body, the same at every resolution: a membrane modulus and a bending
+  // modulus, each element's constant scaled by its rest geometry (struts Y A_e / l^2, hinges
+  // 2 D |e|^2 / (A_1 + A_2), Grinspun et al. 2003, "Discrete Shells"), and damping of the
+  // body's deformation relative to its rigid motion at one rate for every mode.
+  Body,
+};
+
+// The body material's moduli from periods at the body's own size: with the area density
+// rho = M / A and the length L = sqrt(A / 4 pi) (the radius of a sphere of the same area),
+//   Y = rho L^2 (2 pi / P_stretch)^2     [N/m]    (energy density 1/2 Y e^2 under an equal
+//                                                  stretch e in every direction)
+//   D = rho L^4 (2 pi / P_bend)^2        [N m]    (energy density 1/2 D / R^2 bent to radius R)
+// so that a body with its mass spread as a membrane of its own size stretches with about the
+// period P_stretch and bends with about P_bend. The periods' defaults scale with L (a 1 m body:
+// kDefaultStretchPeriod and kDefaultBendPeriod), so a drop from a given height squashes a
+// small ball as much as a large one.
+constexpr double kDefaultStretchPeriod = 0.05;    // [s] for L = 1 m
+constexpr double kDefaultBendPeriod = 1.0;        // [s] for L = 1 m
+constexpr double kDefaultDeformationDecay = 0.1;  // [s]
+
 // The user's description of one soft body, after its shape has been generated or loaded.
 struct BodyDesc {
   std::string name;
@@ -70,6 +96,12 @@ struct BodyDesc {
   // Enclosed gas (Matyka & Ollila 2004): the period of the gas's breathing mode [s], from which
   // its pressure p0 is derived; 0: no gas. Needs a closed mesh.
   double volumePeriod = 0.0;
+  // MaterialModel::Body: the periods at the body's size (unset: the defaults scaled by L) and
+  // the time in which the body's deformation (its motion less the best rigid motion) decays
+  // by e. The element keys above are then not used.
+  MaterialModel material = MaterialModel::Element;
+  std::optional<double> stretchPeriod, bendPeriod;  // P_stretch, P_bend [s]; bendPeriod 0: no hinges
+  double deformationDecay = kDefaultDeformationDecay;  // [s]
   std::vector<uint32_t> pinned;  // body-local vertex indices held fixed in place
 };
 
@@ -85,6 +117,13 @@ struct BodyInfo {
   // Enclosed isothermal ideal gas at the ambient pressure p0 when the volume is restVolume: its
   // pressure over the ambient is p0 (V0 / V - 1). 0: the body holds no gas. [Pa]
   double gasPressure = 0.0;
+  // Damping of the deformation, f_i = -c m_i (v_i - v_rigid(x_i)) with v_rigid the body's
+  // rigid motion that carries its linear and angular momentum (Mueller et al. 2007, "Position
+  // Based Dynamics", section 3.5): every deformation mode decays at the rate c / 2, rigid motion
+  // is untouched, momentum and angular momentum are kept. 0: none. [1/s]
+  double deformationDamping = 0.0;
+  // MaterialModel::Body: the moduli the periods gave (0 otherwise). [N/m], [N m]
+  double membraneModulus = 0.0, bendingModulus = 0.0;
   // The model's vertices are the mesh's in order along the body's longest side, so that
   // vertices near in space are near in memory and a contiguous index range is a slab of the
   // body (what one thread owns). modelVertex[k] is the global model index of the mesh's vertex

@@ -325,6 +325,44 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   // Ranges that keep every derived constant finite and positive (a period of 1e-300 s or a mass
   // of 1e-300 kg overflows the stiffness or underflows the frequency).
   b.mass = r.inRange("mass", b.mass, kMinMass, kMaxMass);
+  // Material: the body's own (resolution independent, the default) or the seed's per element,
+  // which any element key selects (the showcase scenes' values keep their meaning).
+  static const char* const elementKeys[] = {"strut_period", "strut_decay", "hinge_period", "hinge_decay",
+                                            "strut_stiffness", "strut_damping", "hinge_stiffness", "hinge_damping"};
+  static const char* const bodyKeys[] = {"stretch_period", "bend_period", "deformation_decay"};
+  const char* elementKey = nullptr;
+  for (const char* k : elementKeys) {
+    if (!elementKey && r.has(k)) elementKey = k;
+  }
+  const bool allPairs = b.model == SpringModel::AllPairs;
+  const std::string stiffness =
+      r.choice("material", elementKey || allPairs ? "element" : "body", {"body", "element"});
+  if (stiffness == "body") {
+    if (allPairs) r.fail(*r.get("material"), "material", "model = \"all_pairs\" takes material = \"element\"");
+    if (elementKey) {
+      r.fail(*r.get(elementKey), elementKey,
+             "is an element key (material = \"element\"); a body material takes stretch_period, bend_period and "
+             "deformation_decay");
+    }
+    b.material = MaterialModel::Body;
+    b.stretchPeriod = r.optionalInRange("stretch_period", kMinTime, kMaxTime);
+    if (r.has("bend_period")) {
+      b.bendPeriod = r.number("bend_period", 0.0);
+      if (*b.bendPeriod != 0.0) b.bendPeriod = r.inRange("bend_period", 0.0, kMinTime, kMaxTime);
+    }
+    b.deformationDecay = r.number("deformation_decay", b.deformationDecay);
+    if (b.deformationDecay != 0.0) {
+      b.deformationDecay = r.inRange("deformation_decay", b.deformationDecay, kMinTime, kMaxTime);
+    }
+  } else {
+    for (const char* k : bodyKeys) {
+      if (r.has(k)) {
+        r.fail(*r.get(k), k,
+               "is a body material key (material = \"body\"); material = \"element\" takes strut_period, "
+               "strut_decay, hinge_period and hinge_decay");
+      }
+    }
+  }
   b.strutDecay = r.inRange("strut_decay", b.strutDecay, kMinTime, kMaxTime);
   b.strutPeriod = r.inRange("strut_period", b.strutPeriod, kMinTime, kMaxTime);
   b.hingeDecay = r.number("hinge_decay", b.hingeDecay);
@@ -478,6 +516,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
     Reader r(*t, path, "[scene]");
     scene.name = r.string("name", scene.name);
     scene.duration = r.positive("duration", scene.duration);
+    scene.stepGiven = r.has("dt") || r.has("substeps");
     scene.dt = r.positive("dt", scene.dt);
     scene.substeps = r.integer("substeps", 1, 1, kMaxSubsteps);
     if (const toml::node* n = r.get("integrator")) {

@@ -79,6 +79,7 @@ struct SceneDesc {
   double duration = 10.0;  // [s]
   double dt = 0.002;       // [s]
   int substeps = 1;        // steps of dt / substeps per dt
+  bool stepGiven = false;  // the file gave dt or substeps (otherwise the advisor chooses the step)
   Integrator integrator = Integrator::RK4;
   double restingSpeed = -1.0;  // < 0: automatic (see buildModel)
   // Environment.

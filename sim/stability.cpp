@@ -100,7 +100,8 @@ std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t
   std::vector<RowBound> rows(info.vertexCount);
   for (uint32_t k = 0; k < info.vertexCount; ++k) {
     rows[k].vertex = info.firstVertex + k;
-    rows[k].drag = model.drag;
+    rows[k].drag = model.drag + info.deformationDamping;  // both -c m_i on the diagonal (the
+                                                          // rigid part only lowers the bound)
   }
   auto free = [&](uint32_t v) { return model.invMass[v] != 0.0; };
   auto row = [&](uint32_t v) -> RowBound& { return rows[v - info.firstVertex]; };

@@ -8,7 +8,7 @@
 // vertices j it shares a strut or hinge with (pinned neighbours drop out: they do not move).
 // A strut's block norm is k max(1, |1 - l0/l|) (its transverse stiffness when compressed), a
 // hinge's k |g_i| |g_j| with g the angle's gradient at the current shape; damping likewise with
-// d, plus the drag rate. Each row gives omega_i^2 and gamma_i; the integrator's stability on the
+// d, plus the drag and deformation damping rates. Each row gives omega_i^2 and gamma_i; the integrator's stability on the
 // test mode x'' = -omega_i^2 x - gamma_i x' bounds its step.
 //
 // Stability of an integrator on that mode: the spectral radius rho(h) of its one-step

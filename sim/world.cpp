@@ -57,6 +57,7 @@ std::string_view forceStageName(ForceStage stage) {
     case ForceStage::Struts: return "struts";
     case ForceStage::Hinges: return "hinges";
     case ForceStage::Gas: return "gas";
+    case ForceStage::Deformation: return "deformation damping";
   }
   return "?";
 }
@@ -86,6 +87,18 @@ World::World(Model model, Integrator integrator, double dt)
     areaVectors_.assign(model_.faces.size(), Vec3{});
     facesAround_ = vertexFaces(model_);
   }
+  rigid_.assign(model_.bodies.size(), RigidMotion{});
+  for (uint32_t b = 0; b < model_.bodies.size(); ++b) {
+    const BodyInfo& info = model_.bodies[b];
+    if (!(info.deformationDamping > 0.0)) continue;
+    rigid_[b].rate = info.deformationDamping;
+    const uint32_t end = info.firstVertex + info.vertexCount;
+    for (uint32_t i = info.firstVertex; i < end; i += kVolumeChunk) {
+      rigidChunks_.push_back({b, i, std::min(i + kVolumeChunk, end)});
+    }
+  }
+  chunkMoments_.assign(rigidChunks_.size(), MassMoments{});
+  if (!rigidChunks_.empty()) forceStages_.push_back(ForceStage::Deformation);
   for (TriangleCollider& tc : model_.colliders.meshes) {
     if (tc.nodes.empty()) tc.buildBvh();
   }
@@ -224,9 +237,35 @@ void World::updateGas(const Vec3* x) const {
   }
 }
 
+void World::updateRigid(const Vec3* x, const Vec3* v) const {
+  if (rigidChunks_.empty()) return;
+  const auto sumChunks = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c) {
+      const VertexChunk& chunk = rigidChunks_[c];
+      chunkMoments_[c] = massMoments(model_, chunk.begin, chunk.end, x[model_.bodies[chunk.body].firstVertex], x, v);
+    }
+  };
+  if (pool_ && rigidChunks_.size() > 1) {
+    pool_->run([&](unsigned thread) {
+      const std::size_t chunks = rigidChunks_.size(), threads = pool_->size();
+      sumChunks(chunks * thread / threads, chunks * (thread + 1) / threads);
+    });
+  } else {
+    sumChunks(0, rigidChunks_.size());
+  }
+  for (std::size_t c = 0; c < rigidChunks_.size();) {
+    const uint32_t b = rigidChunks_[c].body;
+    MassMoments sum;
+    for (; c < rigidChunks_.size() && rigidChunks_[c].body == b; ++c) sum.add(chunkMoments_[c]);
+    const double rate = rigid_[b].rate;
+    rigid_[b] = rigidMotion(sum, x[model_.bodies[b].firstVertex]);
+    rigid_[b].rate = rate;
+  }
+}
+
 void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const {
   const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
-  updateGas(x);
+  prepareForces(x, v);
   if (pool_) {
     pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, false); });
     return;
@@ -245,6 +284,7 @@ void World::computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const
       case ForceStage::Gas:
         applyGasPressure(model_, overpressure_.data(), facesAround_, areaVectors_.data(), 0, n, f);
         break;
+      case ForceStage::Deformation: applyDeformationDamping(model_, rigid_.data(), 0, n, x, v, f); break;
     }
   }
 }
@@ -268,6 +308,9 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
       case ForceStage::Gas:
         applyGasPressure(model_, overpressure_.data(), facesAround_, areaVectors_.data(), share.begin, share.end, f);
         break;
+      case ForceStage::Deformation:
+        applyDeformationDamping(model_, rigid_.data(), share.begin, share.end, x, v, f);
+        break;
     }
   }
   if (toAcceleration) {
@@ -278,7 +321,7 @@ void World::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec
 void World::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
   if (pool_) {
     const Vec3 air = model_.wind ? model_.wind->airVelocity(t) : Vec3{};
-    updateGas(x);
+    prepareForces(x, v);
     pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, a, true); });
     return;
   }

@@ -1,7 +1,8 @@
 // springy: the world a scene builds, and its time step.
 //
 // The step reads as one ordered list of stages (Box2D's solver stages, MuJoCo's mj_forward):
-//   forces:    [gravity] [drag] [wind] [struts] [hinges] [gas]   (evaluated 1-4 times per step)
+//   forces:    [gravity] [drag] [wind] [struts] [hinges] [gas] [deformation damping]
+//              (evaluated 1-4 times per step)
 //   integrate: the chosen integrator advances positions and velocities by dt
 //   collide:   [static colliders] [damping layers]         (continuous, earliest hit wins)
 // A stage is in the list only if the scene uses it: no wind stage without wind, no hinge stage
@@ -45,7 +46,7 @@ bool parseIntegrator(std::string_view name, Integrator& out);
 // Comma-separated list of all names, for error messages.
 std::string integratorNames();
 
-enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges, Gas };
+enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges, Gas, Deformation };
 std::string_view forceStageName(ForceStage stage);
 
 class ImplicitSolver;
@@ -124,6 +125,14 @@ class World {
   // by the threads, then the chunks' sums in order: enclosedVolume's number on every thread
   // count), then its overpressure.
   void updateGas(const Vec3* x) const;
+  // The deformation damping stage's rigid motions for the state (x, v): each damped body's mass
+  // moments (chunks of vertices summed by the threads, then in order), then its rigid fit.
+  void updateRigid(const Vec3* x, const Vec3* v) const;
+  // Both, before a force evaluation.
+  void prepareForces(const Vec3* x, const Vec3* v) const {
+    updateGas(x);
+    updateRigid(x, v);
+  }
 
   // Asks for the positions (and velocities, if v is not null) of the vertices thread `thread`
   // reads but does not own, ahead of the loops that read them.
@@ -161,6 +170,12 @@ class World {
   mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
   mutable std::vector<Vec3> areaVectors_;      // per face of a gas body: N of sixVolume, same evaluation
   VertexFaces facesAround_;                    // the gas stage's faces per vertex
+  struct VertexChunk {
+    uint32_t body, begin, end;  // vertices [begin, end) of a body with deformation damping
+  };
+  std::vector<VertexChunk> rigidChunks_;        // in body and vertex order
+  mutable std::vector<MassMoments> chunkMoments_;  // per chunk, for the evaluation under way
+  mutable std::vector<RigidMotion> rigid_;      // per body (rate 0: not damped)
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
 };

@@ -19,8 +19,9 @@
 namespace springy {
 namespace {
 
-// Every force stage and both collider kinds: two bodies (one pinned, one holding gas) with drag
-// and gusting wind, a ground plane and a tilted plate they fall onto.
+// Every force stage and both collider kinds: three bodies (one pinned, one holding gas, one of
+// the body material with its deformation damping) with drag and gusting wind, a ground plane
+// and a tilted plate they fall onto.
 const char* kAllStages = R"(
 [scene]
 dt = 0.001
@@ -48,6 +49,19 @@ subdivisions = 6
 radius = 0.6
 position = [3.0, 2.0, 0.0]
 pin = ["top"]
+strut_period = 0.07
+[[body]]
+name = "damped by its deformation"
+shape = "icosphere"
+subdivisions = 1
+radius = 0.4
+position = [-2.0, 1.0, 0.0]
+velocity = [0.0, 0.0, 1.0]
+angular_velocity = [0.0, 3.0, 0.0]
+material = "body"
+stretch_period = 0.5
+bend_period = 2.0
+deformation_decay = 0.005
 [[plane]]
 [[triangles]]
 vertices = [[-2.0, 0.2, -2.0], [2.0, 0.6, -2.0], [2.0, 0.6, 2.0], [-2.0, 0.2, 2.0]]

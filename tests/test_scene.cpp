@@ -225,6 +225,50 @@ TEST(Scene, LoadsFilesAndResolvesMeshPathsRelativeToTheScene) {
 // ---------------------------------------------------------------------------------------------
 // Errors: every one names the file and line.
 
+TEST(Scene, TheMaterialIsTheBodysUnlessAnElementKeyIsGiven) {
+  // No stiffness keys: the body material with its defaults scaled by the body's size (the
+  // octahedron sphere's area is about that of a sphere of radius 6, so L is about 6 m).
+  const SceneDesc plain = parseScene(kBody, kPath);
+  EXPECT_EQ(plain.bodies[0].material, MaterialModel::Body);
+  EXPECT_FALSE(plain.stepGiven);
+  const Model model = buildModel(plain);
+  const BodyInfo& info = model.bodies[0];
+  double area = 0.0;
+  for (const Triangle& t : model.faces) {
+    area += 0.5 * length(cross(model.restPosition[t[1]] - model.restPosition[t[0]],
+                               model.restPosition[t[2]] - model.restPosition[t[0]]));
+  }
+  const double density = 8.0 / area, L = std::sqrt(area / (4 * kPi));
+  const double omega = 2 * kPi / (kDefaultStretchPeriod * L), omegaBend = 2 * kPi / (kDefaultBendPeriod * L);
+  EXPECT_NEAR(info.membraneModulus, density * L * L * omega * omega, 1e-12 * info.membraneModulus);
+  EXPECT_NEAR(info.bendingModulus, density * std::pow(L, 4) * omegaBend * omegaBend, 1e-12 * info.bendingModulus);
+  EXPECT_NEAR(info.deformationDamping, 2.0 / kDefaultDeformationDecay, 1e-12);
+  // No strut or hinge damps on its own: the body's deformation damping does.
+  for (const Strut& st : model.struts) EXPECT_EQ(st.damping, 0.0);
+  for (const Hinge& h : model.hinges) EXPECT_EQ(h.damping, 0.0);
+  // Any element key selects the seed's element material, as in the showcase scenes.
+  const SceneDesc element = parseScene(kBody + "hinge_decay = 3\n[scene]\ndt = 0.001\n", kPath);
+  EXPECT_EQ(element.bodies[0].material, MaterialModel::Element);
+  EXPECT_EQ(buildModel(element).bodies[0].deformationDamping, 0.0);
+  EXPECT_TRUE(element.stepGiven);
+  // Its own keys.
+  const SceneDesc own = parseScene(kBody + "stretch_period = 0.2\nbend_period = 0\ndeformation_decay = 0\n", kPath);
+  const Model ownModel = buildModel(own);
+  EXPECT_EQ(ownModel.hinges.size(), 0u);
+  EXPECT_EQ(ownModel.bodies[0].deformationDamping, 0.0);
+  EXPECT_NEAR(ownModel.bodies[0].membraneModulus, density * L * L * std::pow(2 * kPi / 0.2, 2),
+              1e-12 * ownModel.bodies[0].membraneModulus);
+}
+
+TEST(SceneErrors, MaterialKeysOfTheOtherKindAreErrors) {
+  expectError(kBody + "material = \"body\"\nstrut_period = 0.1\n", 8,
+              {"'strut_period'", "element key", "stretch_period"});
+  expectError(kBody + "strut_period = 0.1\nbend_period = 0.5\n", 8, {"'bend_period'", "body material key"});
+  expectError(kBody + "material = \"body\"\nmodel = \"all_pairs\"\n", 7, {"'material'", "all_pairs"});
+  expectError(kBody + "material = \"stiff\"\n", 7, {"'material'", "body, element"});
+  expectError(kBody + "deformation_decay = -1\n", 7, {"'deformation_decay'", "[1e-06, 1e+06]"});
+}
+
 TEST(SceneErrors, UnknownKeysAreErrorsWithTheirLine) {
   // In [[body]]: line 7.
   expectError(kBody + "masss = 8\n", 7, {"'masss'", "[[body]] #1"});

@@ -30,6 +30,9 @@ constexpr int kMaxProxyVertices = 1 << 16;                  // proxy_vertices (1
 constexpr std::size_t kMaxPinNear = 256;                    // pin_near points per body
 // proxy = "auto" wraps a mesh of more vertices than this (far finer than a body needs).
 constexpr std::size_t kProxyAutoMaxVertices = 20000;
+// A proxy's default vertex count is the input's, clamped to 162 .. this (the body material behaves
+// alike at every count, so a coarse proxy is as good a body and much faster).
+constexpr std::size_t kProxyDefaultMaxVertices = 642;
 
 // Ranges of body parameters that keep every derived constant finite and positive.
 constexpr double kMinMass = 1e-9, kMaxMass = 1e9;           // [kg]

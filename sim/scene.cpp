@@ -281,7 +281,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
         if (reason) {
           ProxyOptions options;
           options.targetVertices = proxyVertices > 0 ? static_cast<std::size_t>(proxyVertices)
-                                                     : std::clamp<std::size_t>(mesh.positions.size(), 162, 2562);
+                                                     : std::clamp<std::size_t>(mesh.positions.size(), 162, kProxyDefaultMaxVertices);
           const ProxyResult built = buildProxy(mesh, options);
           b.drawMesh = std::move(mesh);
           mesh = built.mesh;

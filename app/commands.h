@@ -58,6 +58,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
 struct SuggestOptions {
   std::vector<std::string> scenes;
   RunOverrides overrides;
+  double keepVolume = 0.85;  // the fraction of its rest volume a body should keep through impacts
 };
 int runSuggest(const SuggestOptions& options);
 

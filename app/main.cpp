@@ -93,6 +93,11 @@ int main(int argc, char** argv) {
       app.add_subcommand("suggest", "Estimate stable dt and propose stable T, P, T_theta, P_theta for a scene");
   suggestCmd->add_option("scenes", suggest.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   addRunOverrides(suggestCmd, suggest.overrides);
+  suggestCmd
+      ->add_option("--keep-volume", suggest.keepVolume,
+                   "Volume fraction each body should keep through its first impact; suggest simulates the scene "
+                   "to predict the squash, and the periods that keep this much (default 0.85)")
+      ->check(kFraction);
 
   springy::StudyOptions study;
   CLI::App* studyCmd = app.add_subcommand("study", "Work-precision (accuracy) or stability study of the integrators");

@@ -56,6 +56,22 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
   const RenderDesc& rd = scene.render;
   integrator_ = std::string(integratorName(world.integrator()));
   Bounds all = boundsOf(world.positions());
+  // The default camera frames where the bodies land too: their shadows straight down onto each
+  // plane they are above (a body dropped onto the ground otherwise falls out of the picture).
+  {
+    const Bounds bodies = all;
+    for (const PlaneDesc& p : scene.planes) {
+      const Vec3 n = p.collider.normal;
+      for (int corner = 0; corner < 8; ++corner) {
+        const Vec3 x{corner & 1 ? bodies.hi.x : bodies.lo.x, corner & 2 ? bodies.hi.y : bodies.lo.y,
+                     corner & 4 ? bodies.hi.z : bodies.lo.z};
+        const double height = dot(x - p.collider.point, n);
+        if (!(height > 0.0) || !(height < 1e3 * length(bodies.size()) + 1.0)) continue;
+        const Vec3 landing = x - n * height;
+        all = {componentMin(all.lo, landing), componentMax(all.hi, landing)};
+      }
+    }
+  }
   // Bodies: topology once, body-local indices.
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     const BodyInfo& info = model.bodies[b];

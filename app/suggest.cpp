@@ -8,8 +8,11 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "sim/diagnostics.h"
 #include "sim/error.h"
+#include "sim/parallel.h"
 #include "sim/stability.h"
+#include "sim/world.h"
 
 namespace springy {
 namespace {
@@ -31,6 +34,137 @@ double smallestStable(F stable, double lo, double hi) {
     (stable(mid) ? hi : lo) = mid;
   }
   return hi;
+}
+
+// How much each body squashes through its first impact, by simulation: lowest volume over
+// rest, largest flattening (1 - its extent along gravity over the rest extent), over the
+// horizon, at the default step (kImpactMargin under the advisor's limit for the values given).
+struct Squash {
+  double lowestVolume = 1.0, flattening = 0.0;
+  bool finite = true;
+};
+
+// The time by which every body has met the ground and bounced: each body's fall to the nearest
+// plane under it (from its lowest vertex, with its initial velocity), plus 0.6 s; the scene's
+// duration if shorter; 2 s when nothing is under any body.
+double squashHorizon(const SceneDesc& scene) {
+  const double g = length(scene.gravity);
+  double latest = -1.0;
+  for (const BodyDesc& b : scene.bodies) {
+    double first = INFINITY;
+    for (const PlaneDesc& p : scene.planes) {
+      const Vec3 n = p.collider.normal;
+      const double a = g > 0.0 ? -dot(scene.gravity, n) : 0.0;  // acceleration toward the plane
+      if (!(a > 0.0)) continue;
+      double h = INFINITY;
+      for (const Vec3& x : b.mesh.positions) h = std::min(h, dot(x - p.collider.point, n));
+      const double u = -dot(b.velocity, n);  // initial speed toward it
+      first = std::min(first, (-u + std::sqrt(std::max(0.0, u * u + 2 * a * std::max(0.0, h)))) / a);
+    }
+    if (std::isfinite(first)) latest = std::max(latest, first);
+  }
+  return std::min(scene.duration, latest >= 0.0 ? latest + 0.6 : 2.0);
+}
+
+std::vector<Squash> simulateSquash(const SceneDesc& scene, double horizon) {
+  Model model = buildModel(scene);
+  const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, horizon);
+  const int substeps = std::isfinite(r.dtMax) ? safeSubsteps(scene.dt, r.dtMax, kImpactMargin) : scene.substeps;
+  const Vec3 up = length(scene.gravity) > 0.0 ? scene.gravity / -length(scene.gravity) : Vec3{0.0, 1.0, 0.0};
+  const auto extent = [&](const World& w, const BodyInfo& info) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      const double y = dot(w.positions()[i], up);
+      lo = std::min(lo, y), hi = std::max(hi, y);
+    }
+    return hi - lo;
+  };
+  World world(std::move(model), scene.integrator, scene.dt / std::max(substeps, scene.substeps));
+  world.setThreads(defaultThreadCount());
+  const std::size_t bodies = world.model().bodies.size();
+  std::vector<Squash> out(bodies);
+  std::vector<double> restExtent(bodies);
+  for (std::size_t b = 0; b < bodies; ++b) restExtent[b] = extent(world, world.model().bodies[b]);
+  const double every = 1.0 / 240.0;  // measured this often
+  double next = every;
+  while (world.time() < horizon) {
+    world.step();
+    if (world.time() < next) continue;
+    next += every;
+    for (std::size_t b = 0; b < bodies; ++b) {
+      const BodyInfo& info = world.model().bodies[b];
+      const BodyMeasures m = measureBody(world, static_cast<uint32_t>(b));
+      if (!m.finite) {
+        out[b].finite = false;
+        return out;
+      }
+      if (info.restVolume > 0.0) out[b].lowestVolume = std::min(out[b].lowestVolume, m.volume / info.restVolume);
+      out[b].flattening = std::max(out[b].flattening, 1.0 - extent(world, info) / restExtent[b]);
+    }
+  }
+  return out;
+}
+
+// The body's periods scaled by f (f < 1: stiffer): the body material's stretch and bend
+// periods, or the element material's strut and hinge periods (direct constants by 1 / f^2).
+void scalePeriods(BodyDesc& desc, const BodyInfo& info, double f) {
+  if (desc.material == MaterialModel::Body) {
+    desc.stretchPeriod = info.stretchPeriod * f;
+    desc.bendPeriod = info.bendPeriod * f;
+    return;
+  }
+  desc.strutPeriod *= f;
+  if (desc.hingePeriod > 0.0) desc.hingePeriod *= f;
+  if (desc.strutStiffness) *desc.strutStiffness /= f * f;
+  if (desc.hingeStiffness) *desc.hingeStiffness /= f * f;
+}
+
+void printSquash(const SceneDesc& scene, const Model& model, double keepVolume) {
+  const double horizon = squashHorizon(scene);
+  const std::vector<Squash> now = simulateSquash(scene, horizon);
+  std::printf("  shape through the first impact (simulated to %.3g s at the default step; --keep-volume %g):\n", horizon,
+              keepVolume);
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    const BodyInfo& info = model.bodies[b];
+    const Squash& s = now[b];
+    if (!s.finite) {
+      std::printf("    body '%s': the simulation blew up; make the step smaller first\n", info.name.c_str());
+      return;
+    }
+    std::printf("    body '%s': lowest volume %.0f%% of rest, flattened by up to %.0f%%", info.name.c_str(),
+                100 * s.lowestVolume, 100 * s.flattening);
+    if (!(info.restVolume > 0.0) || s.lowestVolume >= keepVolume) {
+      std::printf(": holds its shape\n");
+      continue;
+    }
+    // Bisect the period factor f in [0.1, 1] (in log): the softest values that keep the volume.
+    auto keeps = [&](double f) {
+      SceneDesc trial = scene;
+      scalePeriods(trial.bodies[b], info, f);
+      const std::vector<Squash> t = simulateSquash(trial, horizon);
+      return t[b].finite && t[b].lowestVolume >= keepVolume;
+    };
+    double lo = 0.1, hi = 1.0;
+    if (!keeps(lo)) {
+      std::printf(": below %.0f%%, and periods a tenth as long do not keep it either (a gas, volume_period, "
+                  "holds a volume at any softness)\n",
+                  100 * keepVolume);
+      continue;
+    }
+    for (int i = 0; i < 5; ++i) {
+      const double mid = std::sqrt(lo * hi);
+      (keeps(mid) ? lo : hi) = mid;
+    }
+    BodyDesc stiffer = scene.bodies[b];
+    scalePeriods(stiffer, info, lo);
+    if (stiffer.material == MaterialModel::Body) {
+      std::printf(": to keep %.0f%%: stretch_period = %.3g, bend_period = %.3g (x %.2f)\n", 100 * keepVolume,
+                  *stiffer.stretchPeriod, *stiffer.bendPeriod, lo);
+    } else {
+      std::printf(": to keep %.0f%%: its periods x %.2f (strut_period = %.3g, hinge_period = %.3g)\n",
+                  100 * keepVolume, lo, stiffer.strutPeriod, stiffer.hingePeriod);
+    }
+  }
 }
 
 }  // namespace
@@ -136,6 +270,29 @@ int runSuggest(const SuggestOptions& options) {
         return s.str();
       };
       const bool hinges = info.hingeCount > 0, gas = info.gasPressure > 0.0;
+      if (desc.material == MaterialModel::Body) {
+        // The body material: its struts follow stretch_period, its hinges bend_period; its
+        // deformation damping (a rate per vertex, like drag) barely moves the limit.
+        const double bodyTarget = h / kSafety;
+        auto stable = [&](double sp, double bp) { return limit(scaled(1, sp, 1, bp, 1)) >= bodyTarget; };
+        double fb = 1.0;
+        if (!stable(1.0, 1.0)) {
+          double hi = 2.0;
+          while (!stable(hi, hi) && hi < 1e6) hi *= 2;
+          fb = smallestStable([&](double x) { return stable(x, x); }, hi / 2, hi);
+        }
+        if (fb > 1.0) {
+          std::printf("    suggested for a step of %g s: stretch_period = %.4g, bend_period = %.4g (x %.3g)\n", h,
+                      info.stretchPeriod * fb, info.bendPeriod * fb, fb);
+        }
+        const double gs = smallestStable([&](double g) { return stable(g * fb, fb); }, 1e-4, 1.0);
+        const double gb = hinges ? smallestStable([&](double g) { return stable(fb, g * fb); }, 1e-4, 1.0) : 1.0;
+        std::printf("    stiffest stable values at a step of %g s, one at a time: stretch_period >= %.4g", h,
+                    info.stretchPeriod * fb * gs);
+        if (hinges) std::printf(", bend_period >= %.4g", info.bendPeriod * fb * gb);
+        std::printf("\n");
+        continue;
+      }
       std::printf("    suggested for a step of %g s%s:\n", h,
                   f > 1.0 ? "" : " (the current values are stable; the stiffest values follow)");
       if (f > 1.0) {
@@ -182,6 +339,7 @@ int runSuggest(const SuggestOptions& options) {
       }
       std::printf("\n");
     }
+    printSquash(scene, model, options.keepVolume);
   }
   return failures == 0 ? 0 : 1;
 }

@@ -204,6 +204,8 @@ void addBody(Model& model, const BodyDesc& desc) {
     const double density = desc.mass / area, scale = std::sqrt(area / (4 * kPi));
     const double stretch = desc.stretchPeriod.value_or(kDefaultStretchPeriod * scale);
     const double bend = desc.bendPeriod.value_or(kDefaultBendPeriod * scale);
+    info.stretchPeriod = stretch;
+    info.bendPeriod = bend;
     info.membraneModulus = density * scale * scale * (2 * kPi / stretch) * (2 * kPi / stretch);
     info.bendingModulus = bend > 0.0 ? density * std::pow(scale, 4) * (2 * kPi / bend) * (2 * kPi / bend) : 0.0;
     info.deformationDamping = desc.deformationDecay > 0.0 ? 2.0 / desc.deformationDecay : 0.0;

@@ -122,7 +122,9 @@ struct BodyInfo {
   // Based Dynamics", section 3.5): every deformation mode decays at the rate c / 2, rigid motion
   // is untouched, momentum and angular momentum are kept. 0: none. [1/s]
   double deformationDamping = 0.0;
-  // MaterialModel::Body: the moduli the periods gave (0 otherwise). [N/m], [N m]
+  // MaterialModel::Body: the periods used (given or default) and the moduli they gave (0
+  // otherwise). [s], [N/m], [N m]
+  double stretchPeriod = 0.0, bendPeriod = 0.0;
   double membraneModulus = 0.0, bendingModulus = 0.0;
   // The model's vertices are the mesh's in order along the body's longest side, so that
   // vertices near in space are near in memory and a contiguous index range is a slab of the

@@ -34,8 +34,10 @@ std::string describe(const World& world, uint32_t body, const std::string& what,
 
 // What to try after an instability; a body with gas also has a volume_period to lengthen.
 std::string stepAdvice(const BodyInfo& body) {
+  const bool own = body.membraneModulus > 0.0;  // the body material
   return std::string("Try a smaller dt or more substeps (--substeps), a more stable integrator (rk4, verlet), or "
-                     "softer springs (longer strut_period / hinge_period") +
+                     "softer springs (longer ") +
+         (own ? "stretch_period / bend_period" : "strut_period / hinge_period") +
          (body.gasPressure > 0.0 ? " / volume_period" : "") + "); `springy suggest` estimates a stable dt.";
 }
 
@@ -104,9 +106,13 @@ std::optional<Failure> Monitor::check(const World& world) {
         std::ostringstream s;
         s << "its volume fell to " << 100.0 * ratio << "% of rest, below the required " << 100.0 * limits_.minVolume
           << "%";
-        return fail(s.str(), "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
-                             "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
-                             "strut_period.");
+        return fail(s.str(), info.membraneModulus > 0.0
+                                 ? "The body is too soft to keep its shape: try a shorter bend_period or stretch_period "
+                                   "(`springy suggest --keep-volume` finds them), or a gas (volume_period)."
+                                 : "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
+                                   "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
+                                   "strut_period, or the body material (scenes/README.md), which means the same at "
+                                   "every resolution.");
       }
     }
   }

@@ -114,4 +114,40 @@ TEST(Suggest, NamesTheGasAndProposesALongerVolumePeriod) {
   EXPECT_NE(c.output.find("/ volume_period)"), std::string::npos) << c.output;
 }
 
+TEST(Suggest, PredictsTheSquashAndPeriodsThatKeepTheVolume) {
+  // A soft ball of the body material dropped 2 m: suggest predicts that it loses more than 15%
+  // of its volume, and proposes stretch and bend periods; with them, check's 85% floor holds,
+  // and without them it is broken.
+  const fs::path dir = tempDir("squash");
+  const std::string ball =
+      "[scene]\nduration = 1.5\n[[body]]\nshape = \"icosphere\"\nsubdivisions = 2\nposition = [0.0, 3.0, 0.0]\n"
+      "mass = 1.0\n";
+  std::ofstream(dir / "soft.toml") << ball << "stretch_period = 0.4\nbend_period = 3.0\n[[plane]]\n";
+  const Result r = run("suggest " + (dir / "soft.toml").string() + " --keep-volume 0.85");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::size_t lowest = r.output.find("lowest volume ");
+  ASSERT_NE(lowest, std::string::npos) << r.output;
+  EXPECT_LT(std::stod(r.output.substr(lowest + 14)), 85.0) << r.output;
+  const std::size_t at = r.output.find("to keep 85%: stretch_period = ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const double stretch = std::stod(r.output.substr(at + 30));
+  const std::size_t bendAt = r.output.find("bend_period = ", at);
+  ASSERT_NE(bendAt, std::string::npos) << r.output;
+  const double bend = std::stod(r.output.substr(bendAt + 14));
+  EXPECT_LT(stretch, 0.4);
+  EXPECT_LT(bend, 3.0);
+  std::ofstream(dir / "stiffer.toml") << ball << "stretch_period = " << stretch << "\nbend_period = " << bend
+                                      << "\n[[plane]]\n";
+  const Result soft = run("check " + (dir / "soft.toml").string() + " --min-volume 0.85");
+  EXPECT_NE(soft.status, 0) << soft.output;
+  EXPECT_NE(soft.output.find("shorter bend_period or stretch_period"), std::string::npos) << soft.output;
+  const Result stiffer = run("check " + (dir / "stiffer.toml").string() + " --min-volume 0.85");
+  EXPECT_EQ(stiffer.status, 0) << stiffer.output;
+  // A body that holds its shape is said to.
+  std::ofstream(dir / "default.toml") << ball << "[[plane]]\n";
+  const Result plain = run("suggest " + (dir / "default.toml").string());
+  EXPECT_NE(plain.output.find("holds its shape"), std::string::npos) << plain.output;
+  fs::remove_all(dir);
+}
+
 }  // namespace

@@ -269,10 +269,11 @@ void addBody(Model& model, const BodyDesc& desc) {
       h.minLever[0] = 0.2 * g.leverLeft;
       h.minLever[1] = 0.2 * g.leverRight;
       if (bodyMaterial) {
-        // Discrete shells' weight |e|^2 / (A_1 + A_2); the factor 2 makes a flat mesh of
-        // equilateral triangles bent into a cylinder of radius R store 1/2 D / R^2 per unit area.
+        // Discrete shells' weight |e|^2 / (A_1 + A_2): a sheet of equilateral triangles bent
+        // into a cylinder of radius R stores 1/2 D / R^2 per unit area, in any direction (the
+        // hinges across the bend turn by h / R, h a triangle's height; test_material).
         const double rest = length(x1 - x0);
-        h.stiffness = 2.0 * info.bendingModulus * rest * rest / (faceArea[e.face] + faceArea[twin->face]);
+        h.stiffness = info.bendingModulus * rest * rest / (faceArea[e.face] + faceArea[twin->face]);
         h.damping = 0.0;
         model.hinges.push_back(h);
         continue;

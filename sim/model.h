@@ -56,7 +56,7 @@ enum class MaterialModel {
   Element,
   // A material of the body, the same at every resolution: a membrane modulus and a bending
   // modulus, each element's constant scaled by its rest geometry (struts Y A_e / l^2, hinges
-  // 2 D |e|^2 / (A_1 + A_2), Grinspun et al. 2003, "Discrete Shells"), and damping of the
+  // D |e|^2 / (A_1 + A_2), Grinspun et al. 2003, "Discrete Shells"), and damping of the
   // body's deformation relative to its rigid motion at one rate for every mode.
   Body,
 };
@@ -71,7 +71,7 @@ enum class MaterialModel {
 // kDefaultStretchPeriod and kDefaultBendPeriod), so a drop from a given height squashes a
 // small ball as much as a large one.
 constexpr double kDefaultStretchPeriod = 0.05;    // [s] for L = 1 m
-constexpr double kDefaultBendPeriod = 1.0;        // [s] for L = 1 m
+constexpr double kDefaultBendPeriod = 0.7;        // [s] for L = 1 m
 constexpr double kDefaultDeformationDecay = 0.1;  // [s]
 
 // The user's description of one soft body, after its shape has been generated or loaded.

@@ -335,7 +335,6 @@ struct GpuMesh {
   Material material;
   Bounds bounds;
   bool dynamic = false;
-  bool visible = true;
   bool hasPositions = false;
   // Ground only:
   bool ground = false;
@@ -381,8 +380,6 @@ struct Renderer::Impl {
   Camera camera;
   Light light;
   glm::vec3 skyTop{0.36f, 0.56f, 0.84f}, skyBottom{0.86f, 0.90f, 0.95f};
-  bool haveShadowBounds = false;
-  Bounds shadowBounds;
   RenderTimings timings;
 
   static SceneTarget targetFor(const RenderSettings& s) {
@@ -520,11 +517,11 @@ struct Renderer::Impl {
   Bounds casterBounds() const {
     Bounds b;
     for (const GpuMesh& m : meshes)
-      if (m.visible && !m.ground && m.hasPositions) b.add(m.bounds);
+      if (!m.ground && m.hasPositions) b.add(m.bounds);
     return b;
   }
 
-  bool drawable(const GpuMesh& m) const { return m.visible && m.hasPositions && m.indexCount > 0; }
+  bool drawable(const GpuMesh& m) const { return m.hasPositions && m.indexCount > 0; }
 
   // Shadow map texels needed for light-space extent `size` (world units): at the casters'
   // nearest point to the camera, a texel should cover at most one pixel (the PCF taps blur over
@@ -730,7 +727,7 @@ struct Renderer::Impl {
     float texelWorld = 0.0f;
     bool shadowsOn = false;
     if (settings.shadows) {
-      const Bounds b = haveShadowBounds ? shadowBounds : casterBounds();
+      const Bounds b = casterBounds();
       if (!b.empty()) {
         shadowsOn = true;
         lightVP = lightViewProj(b, texelWorld);
@@ -893,9 +890,6 @@ struct Renderer::Impl {
 Renderer::Renderer(const RenderSettings& settings) : impl_(std::make_unique<Impl>(settings)) {}
 Renderer::~Renderer() = default;
 
-const RenderSettings& Renderer::settings() const { return impl_->settings; }
-int Renderer::width() const { return impl_->settings.width; }
-int Renderer::height() const { return impl_->settings.height; }
 float Renderer::aspect() const {
   return static_cast<float>(impl_->settings.width) / static_cast<float>(impl_->settings.height);
 }
@@ -980,16 +974,10 @@ MeshId Renderer::addGround(glm::vec3 point, glm::vec3 normal, float halfExtent, 
   return id;
 }
 
-void Renderer::setMaterial(MeshId id, const Material& material) {
-  impl_->mesh(id).material = material;
-}
-void Renderer::setVisible(MeshId id, bool visible) { impl_->mesh(id).visible = visible; }
-
 void Renderer::setCamera(const Camera& camera) {
   (void)camera.view();  // a degenerate camera (position == target) throws here, not mid-frame
   impl_->camera = camera;
 }
-const Camera& Renderer::camera() const { return impl_->camera; }
 void Renderer::setLight(const Light& light) {
   if (!(glm::length(light.direction) > 0.0f))
     throw RenderError("Renderer::setLight: zero light direction");
@@ -998,17 +986,6 @@ void Renderer::setLight(const Light& light) {
 void Renderer::setSky(glm::vec3 top, glm::vec3 bottom) {
   impl_->skyTop = top;
   impl_->skyBottom = bottom;
-}
-void Renderer::setShadowBounds(glm::vec3 lo, glm::vec3 hi) {
-  impl_->haveShadowBounds = true;
-  impl_->shadowBounds = Bounds{};
-  impl_->shadowBounds.add(lo);
-  impl_->shadowBounds.add(hi);
-}
-void Renderer::clearShadowBounds() { impl_->haveShadowBounds = false; }
-std::pair<glm::vec3, glm::vec3> Renderer::sceneBounds() const {
-  const Bounds b = impl_->casterBounds();
-  return {b.lo, b.hi};
 }
 void Renderer::setOverlayText(std::vector<std::string> lines) {
   if (lines == impl_->overlayLines) return;
@@ -1044,14 +1021,13 @@ void Renderer::readPixels(std::vector<std::uint8_t>& rgba, RowOrder order) {
 
 Image Renderer::readImage() {
   Image img;
-  img.width = width();
-  img.height = height();
+  img.width = impl_->settings.width;
+  img.height = impl_->settings.height;
   readPixels(img.rgba);
   return img;
 }
 
 const RenderTimings& Renderer::timings() const { return impl_->timings; }
-void Renderer::resetTimings() { impl_->timings = RenderTimings{}; }
 
 std::string Renderer::glInfo() const {
   return std::string(impl_->ctx.glRenderer()) + " / " + impl_->ctx.glVersion();

@@ -92,9 +92,6 @@ public:
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
-  const RenderSettings& settings() const;
-  int width() const;
-  int height() const;
   float aspect() const;
 
   // --- Meshes. Triangle indices: 3 per triangle, each < vertex count. Throws RenderError on
@@ -114,20 +111,12 @@ public:
   MeshId addGround(glm::vec3 point, glm::vec3 normal, float halfExtent,
                    glm::vec3 colourA = {0.78f, 0.78f, 0.76f},
                    glm::vec3 colourB = {0.58f, 0.60f, 0.62f}, float tileSize = 0.5f);
-  void setMaterial(MeshId id, const Material& material);
-  void setVisible(MeshId id, bool visible);
 
   // --- Scene.
   void setCamera(const Camera& camera);  // throws RenderError when position == target
-  const Camera& camera() const;
   void setLight(const Light& light);
   void setSky(glm::vec3 top, glm::vec3 bottom);  // vertical gradient, top row = top colour
-  // Box the shadow map must cover (all shadow casters). Without it, the bounds of all visible
-  // meshes except grounds are used, recomputed every frame.
-  void setShadowBounds(glm::vec3 lo, glm::vec3 hi);
-  void clearShadowBounds();
-  // Bounds of all visible meshes except grounds (empty scene: lo > hi).
-  std::pair<glm::vec3, glm::vec3> sceneBounds() const;
+  // (The shadow map covers the bounds of every mesh but the grounds, fitted anew each frame.)
   // Text lines drawn top-left on a translucent dark backing (empty: no overlay). UTF-8.
   void setOverlayText(std::vector<std::string> lines);
 
@@ -139,7 +128,6 @@ public:
   Image readImage();
 
   const RenderTimings& timings() const;
-  void resetTimings();
   // GL_RENDERER / GL_VERSION, for logs.
   std::string glInfo() const;
 

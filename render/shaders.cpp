@@ -1,0 +1,220 @@
+// The GLSL sources of the renderer's programs (see shaders.hpp).
+#include "render/shaders.hpp"
+
+namespace springy::render {
+
+const char* const kMeshVs = R"(#version 330 core
+layout(location = 0) in vec3 aPos;
+layout(location = 1) in vec3 aNormal;
+uniform mat4 uViewProj;
+invariant gl_Position;  // the ground is drawn by two variants and must land on the same depths
+uniform mat4 uLightViewProj;
+uniform float uNormalOffset;
+out vec3 vPos;
+out vec3 vNormal;
+out vec4 vLightPos;
+void main() {
+  vPos = aPos;
+  vNormal = aNormal;
+  // Normal offset: look the shadow map up slightly off the surface (less acne).
+  vLightPos = uLightViewProj * vec4(aPos + aNormal * uNormalOffset, 1.0);
+  gl_Position = uViewProj * vec4(aPos, 1.0);
+}
+)";
+
+// Compiled in variants (see meshVariantSource): SHADOWS, GROUND and FLAT are preprocessor
+// switches, so a fragment only runs the code its mesh needs (llvmpipe executes both sides of a
+// branch, even on a uniform).
+namespace {
+constexpr const char* kMeshFsBody = R"(
+in vec3 vPos;
+in vec3 vNormal;
+in vec4 vLightPos;
+uniform vec3 uAlbedo;       // linear colour (ground: colour A)
+uniform float uAlpha;
+uniform float uShininess;
+uniform float uSpecular;
+uniform vec3 uToLight;      // unit vector towards the light
+uniform vec3 uLightColour;
+uniform vec3 uAmbient;
+uniform vec3 uEye;
+uniform sampler2DShadow uShadowMap;
+uniform float uShadowStep;  // PCF tap spacing, shadow-map uv units
+uniform vec3 uGroundOrigin;
+uniform vec3 uGroundU;
+uniform vec3 uGroundV;
+uniform vec3 uGroundB;      // linear colour B
+uniform float uTile;
+uniform float uGroundExtent;
+uniform vec3 uSkyTop;
+uniform vec3 uSkyBottom;
+uniform float uHeight;
+out vec4 fragColour;
+
+vec3 toDisplay(vec3 c) { return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2)); }
+
+#if SHADOWS
+float shadowFactor() {
+  vec3 p = vLightPos.xyz / vLightPos.w * 0.5 + 0.5;
+  if (p.x <= 0.0 || p.x >= 1.0 || p.y <= 0.0 || p.y >= 1.0) return 1.0;
+  p.z = min(p.z, 1.0);  // receivers beyond the far plane compare as "far"
+  // 4 bilinear (hardware 2x2) comparisons = smooth 4x4-texel penumbra.
+  float s = texture(uShadowMap, vec3(p.xy + vec2(-uShadowStep, -uShadowStep), p.z));
+  s += texture(uShadowMap, vec3(p.xy + vec2(uShadowStep, -uShadowStep), p.z));
+  s += texture(uShadowMap, vec3(p.xy + vec2(-uShadowStep, uShadowStep), p.z));
+  s += texture(uShadowMap, vec3(p.xy + vec2(uShadowStep, uShadowStep), p.z));
+  return s * 0.25;
+}
+#endif
+
+void main() {
+#if FLAT
+  // Faceted: the screen-space derivatives of the position span the triangle's plane; their
+  // cross product faces the viewer.
+  vec3 n = normalize(cross(dFdx(vPos), dFdy(vPos)));
+#else
+  vec3 n = normalize(vNormal);
+  if (!gl_FrontFacing) n = -n;  // two-sided lighting
+#endif
+  vec3 l = uToLight;
+  float ndl = max(dot(n, l), 0.0);
+#if SHADOWS
+  float shadow = ndl > 0.0 ? shadowFactor() : 1.0;
+#else
+  float shadow = 1.0;
+#endif
+  float hemi = 0.75 + 0.25 * n.y;
+#if GROUND
+  vec3 d = vPos - uGroundOrigin;
+  vec2 uv = vec2(dot(d, uGroundU), dot(d, uGroundV)) / uTile;
+  // Box-filtered checker: averages to grey where tiles get smaller than a pixel.
+  vec2 w = fwidth(uv) + 1e-4;
+  vec2 i = 2.0 * (abs(fract((uv - 0.5 * w) * 0.5) - 0.5) - abs(fract((uv + 0.5 * w) * 0.5) - 0.5)) / w;
+  vec3 albedo = mix(uAlbedo, uGroundB, 0.5 - 0.5 * i.x * i.y);
+  float fog = smoothstep(0.55, 1.0, length(d) / uGroundExtent);
+  vec3 lit = albedo * (uAmbient * hemi + uLightColour * ndl * shadow);
+  // The ground fades into the sky towards its edge: the sky's colour at this pixel (as the sky
+  // pass draws it), mixed in here, so the sky is only drawn where nothing else is.
+  float t = clamp((gl_FragCoord.y - 0.5) / max(uHeight - 1.0, 1.0), 0.0, 1.0);
+  fragColour = vec4(mix(toDisplay(lit), mix(uSkyBottom, uSkyTop, t), fog), uAlpha);
+#else
+  vec3 v = normalize(uEye - vPos);
+  vec3 h = normalize(l + v);
+  float spec = ndl > 0.0 ? uSpecular * pow(max(dot(n, h), 0.0), uShininess) : 0.0;
+  vec3 lit = uAlbedo * (uAmbient * hemi + uLightColour * ndl * shadow) + uLightColour * spec * shadow;
+  fragColour = vec4(toDisplay(lit), uAlpha);
+#endif
+}
+)";
+
+}  // namespace
+
+std::string meshVariantSource(bool shadows, bool ground, bool flat) {
+  return std::string("#version 330 core\n#define SHADOWS ") + (shadows ? "1" : "0") +
+         "\n#define GROUND " + (ground ? "1" : "0") + "\n#define FLAT " + (flat ? "1" : "0") +
+         "\n" + kMeshFsBody;
+}
+
+// FXAA-style anti-aliasing (after Lottes' FXAA, "console" variant): the luma of the 4 diagonal
+// neighbours gives the edge direction; two and four taps along the edge are blended; pixels
+// whose neighbourhood contrast is low keep their exact colour (texelFetch). Two passes, because
+// llvmpipe runs both sides of a branch: EDGE_PASS writes every pixel's exact colour and marks
+// the edge pixels in the depth buffer (depth 0, the rest 1); the blend pass, drawn at depth 0.5
+// with GL_GREATER, then runs only where an edge was marked (early depth test).
+namespace {
+constexpr const char* kFxaaFsBody = R"(
+uniform sampler2D uScene;
+uniform vec2 uTexel;  // 1 / frame size
+out vec4 fragColour;
+float luma(vec3 c) { return dot(c, vec3(0.299, 0.587, 0.114)); }
+void main() {
+  ivec2 ip = ivec2(gl_FragCoord.xy);
+  ivec2 hi = textureSize(uScene, 0) - 1;
+  vec3 rgbM = texelFetch(uScene, ip, 0).rgb;
+  float lNW = luma(texelFetch(uScene, clamp(ip + ivec2(-1, -1), ivec2(0), hi), 0).rgb);
+  float lNE = luma(texelFetch(uScene, clamp(ip + ivec2(1, -1), ivec2(0), hi), 0).rgb);
+  float lSW = luma(texelFetch(uScene, clamp(ip + ivec2(-1, 1), ivec2(0), hi), 0).rgb);
+  float lSE = luma(texelFetch(uScene, clamp(ip + ivec2(1, 1), ivec2(0), hi), 0).rgb);
+  float lM = luma(rgbM);
+  float lMin = min(lM, min(min(lNW, lNE), min(lSW, lSE)));
+  float lMax = max(lM, max(max(lNW, lNE), max(lSW, lSE)));
+  bool edge = !(lMax - lMin < max(0.0312, lMax * 0.125));
+#if EDGE_PASS
+  fragColour = vec4(rgbM, 1.0);  // no edge here: the exact colour
+  gl_FragDepth = edge ? 0.0 : 1.0;
+#else
+  if (!edge) {
+    fragColour = vec4(rgbM, 1.0);
+    return;
+  }
+  vec2 uv = gl_FragCoord.xy * uTexel;
+  vec2 dir = vec2(-((lNW + lNE) - (lSW + lSE)), (lNW + lSW) - (lNE + lSE));
+  float reduce = max((lNW + lNE + lSW + lSE) * (0.25 / 8.0), 1.0 / 128.0);
+  float rcpDirMin = 1.0 / (min(abs(dir.x), abs(dir.y)) + reduce);
+  dir = clamp(dir * rcpDirMin, vec2(-8.0), vec2(8.0)) * uTexel;
+  vec3 rgbA = 0.5 * (textureLod(uScene, uv + dir * (1.0 / 3.0 - 0.5), 0.0).rgb +
+                     textureLod(uScene, uv + dir * (2.0 / 3.0 - 0.5), 0.0).rgb);
+  vec3 rgbB = rgbA * 0.5 + 0.25 * (textureLod(uScene, uv - dir * 0.5, 0.0).rgb +
+                                   textureLod(uScene, uv + dir * 0.5, 0.0).rgb);
+  float lB = luma(rgbB);
+  fragColour = vec4((lB < lMin || lB > lMax) ? rgbA : rgbB, 1.0);
+#endif
+}
+)";
+}  // namespace
+
+std::string fxaaSource(bool edgePass) {
+  return std::string("#version 330 core\n#define EDGE_PASS ") + (edgePass ? "1" : "0") + "\n" + kFxaaFsBody;
+}
+
+const char* const kDepthVs = R"(#version 330 core
+layout(location = 0) in vec3 aPos;
+uniform mat4 uLightViewProj;
+void main() { gl_Position = uLightViewProj * vec4(aPos, 1.0); }
+)";
+const char* const kDepthFs = R"(#version 330 core
+void main() {}
+)";
+
+const char* const kSkyVs = R"(#version 330 core
+void main() {
+  // One triangle covering the screen.
+  vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
+  gl_Position = vec4(p, 1.0, 1.0);  // on the far plane: depth 1, behind everything
+}
+)";
+// One triangle covering the screen at depth 0.5 (the FXAA blend pass).
+const char* const kMidVs = R"(#version 330 core
+void main() {
+  vec2 p = vec2(gl_VertexID == 1 ? 3.0 : -1.0, gl_VertexID == 2 ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+)";
+const char* const kSkyFs = R"(#version 330 core
+uniform vec3 uTop;
+uniform vec3 uBottom;
+uniform float uHeight;
+out vec4 fragColour;
+void main() {
+  float t = clamp((gl_FragCoord.y - 0.5) / max(uHeight - 1.0, 1.0), 0.0, 1.0);
+  fragColour = vec4(mix(uBottom, uTop, t), 1.0);
+}
+)";
+
+const char* const kOverlayVs = R"(#version 330 core
+uniform vec4 uRect;  // NDC x0, y0 (top), x1, y1 (bottom)
+out vec2 vUv;
+void main() {
+  vec2 c = vec2((gl_VertexID & 1) != 0 ? 1.0 : 0.0, (gl_VertexID & 2) != 0 ? 1.0 : 0.0);
+  vUv = c;  // v = 0: first (top) texture row
+  gl_Position = vec4(mix(uRect.x, uRect.z, c.x), mix(uRect.y, uRect.w, c.y), 0.0, 1.0);
+}
+)";
+const char* const kOverlayFs = R"(#version 330 core
+in vec2 vUv;
+uniform sampler2D uTex;
+out vec4 fragColour;
+void main() { fragColour = texture(uTex, vUv); }  // premultiplied alpha
+)";
+
+}  // namespace springy::render

@@ -1,36 +1,22 @@
 // `springy render` and `springy frames`: scenes to MP4 videos and PNG stills.
 //
-// Video pipeline, three threads joined by bounded queues of recycled buffers (memory stays
-// bounded, nothing is allocated per frame):
-//   simulation thread  advances the World frame by frame and copies the positions into a
-//                      FrameSnapshot (the World is not thread-safe; only this thread touches it);
-//   main thread        owns the GL context: draws each snapshot and reads the pixels back;
-//   encoding thread    converts to yuv420p and encodes.
-// Each stage works on a different frame, so the wall time approaches the slowest stage rather
-// than the sum. The frames are exactly those of the serial order (simulate k, draw k, encode k):
-// the simulation is deterministic and the queues are FIFO. SPRINGY_RENDER_SERIAL=1 runs that
-// serial order on one thread (the reference the tests compare against).
-// SPRINGY_RENDER_PROFILE=1 also prints the time of each render pass (glFinish after each);
-// SPRINGY_RENDER_AA=msaa anti-aliases with 4x MSAA instead of FXAA (for comparisons).
+// A video's frames go through the three-thread pipeline of app/frame_pipeline.h, which also
+// lists the environment variables `springy render` reads (RenderEnvironment).
 #include <sys/stat.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <iostream>
-#include <thread>
 
 #include "app/atomic_file.h"
-#include "app/bounded_queue.h"
 #include "app/commands.h"
-#include "app/progress.h"
+#include "app/frame_pipeline.h"
 #include "app/scene_view.h"
 #include "render/error.hpp"
 #include "render/image.hpp"
@@ -133,200 +119,27 @@ const char* signalName(int signal) {
   }
 }
 
-struct Frame {
-  std::vector<uint8_t> rgba;  // bottom-up rows, as glReadPixels gives them
-};
-
-bool envFlag(const char* name) {
-  const char* v = std::getenv(name);
-  return v && *v && std::string(v) != "0";
-}
-
-// Joins a thread when leaving scope, also by an exception (after the queues were closed).
-struct Joiner {
-  std::thread& t;
-  ~Joiner() {
-    if (t.joinable()) t.join();
-  }
-};
-
 // The encoder's errors name the temporary file; the user knows the target.
 [[noreturn]] void videoFailed(const AtomicFile& output, const std::exception& e) {
   throw Error(output.target() + ": writing the video failed: " + e.what() + " (" + output.target() +
               " left as it was)");
 }
 
-int renderOne(const std::string& path, const std::string& outPath, const RenderOptions& options) {
-  SceneDesc scene = loadSceneWith(path, options.overrides);
-  applyRenderOverrides(scene, options.render);
-  checkCamera(scene);
-  // An unwritable target fails here, before any simulation; no scene is ever written over.
-  AtomicFile output(outPath, options.scenes);
-  World world = makeWorld(scene, options.overrides);
-  Monitor monitor(world);
-  render::RenderSettings rs = renderSettingsOf(scene);
-  rs.profilePasses = envFlag("SPRINGY_RENDER_PROFILE");
-  if (const char* aa = std::getenv("SPRINGY_RENDER_AA"); aa && std::string(aa) == "msaa")
-    rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
-  SceneView view(scene, world, rs);
-
-  render::VideoEncoder::setLibraryLogging(false);
-  render::VideoEncoder encoder;
+render::VideoSettings videoSettingsOf(const SceneDesc& scene, const RenderEnvironment& env) {
   render::VideoSettings vs;
   vs.width = scene.render.width;
   vs.height = scene.render.height;
   vs.fps = scene.render.fps;
   vs.crf = scene.render.crf;
   vs.preset = scene.render.preset;
-  if (const char* t = std::getenv("SPRINGY_X264_THREADS")) vs.threads = std::atoi(t);
-  try {
-    encoder.open(output.temporaryPath(), vs);
-  } catch (const render::RenderError& e) {
-    videoFailed(output, e);
-  }
+  if (env.x264Threads) vs.threads = *env.x264Threads;
+  return vs;
+}
 
-  const long frames = std::max(1L, std::lround(scene.duration * scene.render.fps));
-  const std::size_t bytes =
-      static_cast<std::size_t>(scene.render.width) * static_cast<std::size_t>(scene.render.height) * 4;
-  const bool serial = envFlag("SPRINGY_RENDER_SERIAL");
-
-  Progress progress(scene.name, frames);
-  std::atomic<long long> simNs{0};
-  auto simulate = [&](long k) {
-    const auto t0 = Clock::now();
-    std::optional<Failure> f = advanceTo(world, monitor, static_cast<double>(k) / scene.render.fps);
-    simNs += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
-    return f;
-  };
-  auto report = [&](long done) {
-    const auto& rt = view.renderer().timings();
-    const render::EncodeTimings et = encoder.timings();
-    const double simMs = static_cast<double>(simNs.load()) / 1e6;
-    char detail[160];
-    std::snprintf(detail, sizeof detail, "sim %.1f, render %.1f, encode %.1f frames/s",
-                  1000.0 * static_cast<double>(done) / std::max(simMs, 1e-9),
-                  1000.0 * static_cast<double>(rt.frames) / std::max(rt.totalRenderMs, 1e-9),
-                  1000.0 * static_cast<double>(et.frames) / std::max(et.totalEncodeMs + et.totalConvertMs, 1e-9));
-    progress.update(done, detail);
-  };
-
-  const auto wallStart = Clock::now();
-  std::optional<Failure> failure;
-  bool interruptedRun = false;
-  if (serial) {
-    FrameSnapshot snapshot;
-    Frame f{std::vector<uint8_t>(bytes)};
-    for (long k = 0; k < frames; ++k) {
-      if (interrupted()) {
-        interruptedRun = true;
-        break;
-      }
-      failure = simulate(k);
-      if (failure) break;
-      takeSnapshot(world, snapshot);
-      view.draw(snapshot);
-      view.renderer().readPixels(f.rgba, render::RowOrder::BottomUp);
-      try {
-        encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
-      } catch (const render::RenderError& e) {
-        videoFailed(output, e);
-      }
-      report(k + 1);
-    }
-  } else {
-    BoundedQueue<FrameSnapshot> freeSnapshots(3), snapshots(3);
-    for (int i = 0; i < 3; ++i) freeSnapshots.push(FrameSnapshot{});
-    BoundedQueue<Frame> empty(4), full(3);
-    for (int i = 0; i < 4; ++i) empty.push(Frame{std::vector<uint8_t>(bytes)});
-
-    std::exception_ptr simError, encodeError;
-    std::atomic<bool> simInterrupted{false};
-    std::thread simThread([&] {
-      try {
-        for (long k = 0; k < frames; ++k) {
-          if (interrupted()) {
-            simInterrupted = true;
-            break;
-          }
-          if ((failure = simulate(k))) break;
-          FrameSnapshot s;
-          if (!freeSnapshots.pop(s)) break;  // the renderer stopped
-          takeSnapshot(world, s);
-          if (!snapshots.push(std::move(s))) break;
-        }
-      } catch (...) {
-        simError = std::current_exception();
-      }
-      snapshots.close();  // the renderer drains what is left, then stops
-    });
-    std::thread encodeThread([&] {
-      Frame f;
-      try {
-        while (full.pop(f)) {
-          encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
-          empty.push(std::move(f));
-        }
-      } catch (...) {
-        encodeError = std::current_exception();
-        empty.close();  // unblock the renderer
-      }
-    });
-    {
-      // Declared after the threads: on the way out (also by an exception) the queues are closed
-      // first, so both threads finish, then they are joined.
-      Joiner joinSim{simThread}, joinEncode{encodeThread};
-      struct Closer {
-        BoundedQueue<FrameSnapshot>& a;
-        BoundedQueue<FrameSnapshot>& b;
-        BoundedQueue<Frame>& c;
-        ~Closer() {
-          a.close();
-          b.close();
-          c.close();
-        }
-      } closer{freeSnapshots, snapshots, full};
-      FrameSnapshot s;
-      long done = 0;
-      while (snapshots.pop(s)) {
-        view.draw(s);
-        freeSnapshots.push(std::move(s));
-        Frame f;
-        if (!empty.pop(f)) break;  // the encoder failed
-        view.renderer().readPixels(f.rgba, render::RowOrder::BottomUp);
-        if (!full.push(std::move(f))) break;
-        report(++done);
-      }
-    }
-    interruptedRun = simInterrupted;
-    if (simError) std::rethrow_exception(simError);
-    if (encodeError) {
-      try {
-        std::rethrow_exception(encodeError);
-      } catch (const render::RenderError& e) {
-        videoFailed(output, e);
-      }
-    }
-  }
-  progress.finish();
-  if (interruptedRun || interrupted()) {  // also a signal after the last frame was simulated
-    std::cerr << "springy render: interrupted by " << signalName(interruptSignal()) << "; " << output.target()
-              << " not written\n";
-    return interruptedExitStatus();
-  }
-  if (failure) {
-    std::cerr << "springy render: " << path << ": " << failure->message << "\n"
-              << "springy render: stopped; " << output.target() << " not written (no video of an unstable run)\n";
-    return 1;
-  }
-  try {
-    encoder.finish();
-  } catch (const render::RenderError& e) {
-    videoFailed(output, e);
-  }
-  output.commit();
-
-  const double wall = msSince(wallStart) / 1000.0;
-  const auto& rt = view.renderer().timings();
+// The closing summary: the video, then the time per frame of each stage.
+void printSummary(const std::string& path, const std::string& outPath, const SceneDesc& scene, long frames,
+                  double wallSeconds, const FramePipelineResult& run, const render::RenderTimings& rt,
+                  const render::VideoEncoder& encoder, const RenderEnvironment& env) {
   const render::EncodeTimings et = encoder.timings();
   struct stat st {};
   const double size = ::stat(outPath.c_str(), &st) == 0 ? static_cast<double>(st.st_size) : 0.0;
@@ -336,18 +149,74 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
               scene.render.fps, encoder.codecName().c_str(), size / 1e6);
   std::printf("  wall %.1f s (%.1f frames/s); per frame: simulate %.1f ms, render %.1f ms, read back %.1f ms, "
               "convert %.1f ms, encode %.1f ms (%s)\n",
-              wall, n / wall, static_cast<double>(simNs.load()) / 1e6 / n,
+              wallSeconds, n / wallSeconds, run.simulateMs / n,
               rt.totalRenderMs / static_cast<double>(rt.frames), rt.totalReadbackMs / static_cast<double>(rt.readbacks),
               et.totalConvertMs / static_cast<double>(et.frames), et.totalEncodeMs / static_cast<double>(et.frames),
-              serial ? "one thread, in sequence"
-                     : "simulate, render + read back, convert + encode overlap on 3 threads");
-  if (rs.profilePasses) {
+              env.serial ? "one thread, in sequence"
+                         : "simulate, render + read back, convert + encode overlap on 3 threads");
+  if (env.profilePasses) {
     std::printf("  render passes per frame (glFinish after each):");
     for (std::size_t p = 0; p < render::kRenderPassCount; ++p)
       std::printf("%s %s %.2f ms", p ? "," : "", render::passName(static_cast<render::RenderPass>(p)),
                   rt.passMs[p] / static_cast<double>(rt.frames));
     std::printf("\n");
   }
+}
+
+int renderOne(const std::string& path, const std::string& outPath, const RenderOptions& options,
+              const RenderEnvironment& env) {
+  SceneDesc scene = loadSceneWith(path, options.overrides);
+  applyRenderOverrides(scene, options.render);
+  checkCamera(scene);
+  // An unwritable target fails here, before any simulation; no scene is ever written over.
+  AtomicFile output(outPath, options.scenes);
+  World world = makeWorld(scene, options.overrides);
+  Monitor monitor(world);
+  render::RenderSettings rs = renderSettingsOf(scene);
+  rs.profilePasses = env.profilePasses;
+  if (env.msaa) rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
+  SceneView view(scene, world, rs);
+
+  render::VideoEncoder::setLibraryLogging(false);
+  render::VideoEncoder encoder;
+  try {
+    encoder.open(output.temporaryPath(), videoSettingsOf(scene, env));
+  } catch (const render::RenderError& e) {
+    videoFailed(output, e);
+  }
+
+  FramePipelineSettings pipeline;
+  pipeline.label = scene.name;
+  pipeline.frames = std::max(1L, std::lround(scene.duration * scene.render.fps));
+  pipeline.fps = scene.render.fps;
+  pipeline.width = scene.render.width;
+  pipeline.height = scene.render.height;
+  pipeline.serial = env.serial;
+  const auto wallStart = Clock::now();
+  FramePipelineResult run;
+  try {
+    run = runFramePipeline(world, monitor, view, encoder, pipeline);
+  } catch (const EncodeError& e) {
+    videoFailed(output, e);
+  }
+  if (run.interrupted || interrupted()) {  // also a signal after the last frame was simulated
+    std::cerr << "springy render: interrupted by " << signalName(interruptSignal()) << "; " << output.target()
+              << " not written\n";
+    return interruptedExitStatus();
+  }
+  if (run.failure) {
+    std::cerr << "springy render: " << path << ": " << run.failure->message << "\n"
+              << "springy render: stopped; " << output.target() << " not written (no video of an unstable run)\n";
+    return 1;
+  }
+  try {
+    encoder.finish();
+  } catch (const render::RenderError& e) {
+    videoFailed(output, e);
+  }
+  output.commit();
+  printSummary(path, outPath, scene, pipeline.frames, msSince(wallStart) / 1000.0, run, view.renderer().timings(),
+               encoder, env);
   return 0;
 }
 
@@ -485,11 +354,12 @@ int runRender(const RenderOptions& options) {
     std::cerr << "springy render: " << e.what() << "\n";
     return 1;
   }
+  const RenderEnvironment env = RenderEnvironment::read();
   int status = 0;
   for (std::size_t i = 0; i < options.scenes.size(); ++i) {
     const std::string& path = options.scenes[i];
     try {
-      status = std::max(status, renderOne(path, outputs[i], options));
+      status = std::max(status, renderOne(path, outputs[i], options, env));
     } catch (const std::exception& e) {
       std::cerr << "springy render: " << e.what() << "\n";
       status = std::max(status, 1);

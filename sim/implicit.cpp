@@ -7,7 +7,7 @@
 #include "sim/colliders.h"
 #include "sim/forces.h"
 #include "sim/hinge.h"
-#include "sim/world.h"
+#include "sim/force_stages.h"
 
 namespace springy {
 namespace {
@@ -277,11 +277,11 @@ void ImplicitSolver::project(Eigen::VectorXd& vec) const {
   }
 }
 
-void ImplicitSolver::findContacts(const World& world, const std::vector<Vec3>& x0, double t, double dt) {
+void ImplicitSolver::findContacts(const Forces& forces, const std::vector<Vec3>& x0, double t, double dt) {
   contacts_.clear();
-  const Model& model = world.model();
+  const Model& model = forces.model();
   if (model.colliders.empty()) return;
-  world.computeForces(x0.data(), v0_.data(), t, f_.data());
+  forces.evaluate(x0.data(), v0_.data(), t, f_.data());
   ContactHit hit;
   for (uint32_t i = 0; i < n_; ++i) {
     if (model.invMass[i] == 0.0) continue;
@@ -294,11 +294,11 @@ void ImplicitSolver::findContacts(const World& world, const std::vector<Vec3>& x
   stats_.contactConstraints += contacts_.size();
 }
 
-double ImplicitSolver::residual(const World& world, const std::vector<Vec3>& x0, const std::vector<Vec3>& v, double t,
+double ImplicitSolver::residual(const Forces& forces, const std::vector<Vec3>& x0, const std::vector<Vec3>& v, double t,
                                 double dt) {
-  const Model& model = world.model();
+  const Model& model = forces.model();
   for (std::size_t i = 0; i < n_; ++i) x1_[i] = x0[i] + v[i] * dt;
-  world.computeForces(x1_.data(), v.data(), t + dt, f_.data());
+  forces.evaluate(x1_.data(), v.data(), t + dt, f_.data());
   for (std::size_t i = 0; i < n_; ++i) {
     const Vec3 r = (v[i] - v0_[i]) * model.mass[i] - f_[i] * dt;  // R = M (v - v0) - h f
     for (int c = 0; c < 3; ++c) rhs_(static_cast<Eigen::Index>(3 * i) + c) = -r[c];
@@ -335,35 +335,35 @@ int ImplicitSolver::solveCg(double absoluteFloor) {
   return it;
 }
 
-bool ImplicitSolver::step(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt) {
+bool ImplicitSolver::step(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt) {
   ++stats_.steps;
-  return stepWithin(world, x, v, t, dt, 0);
+  return stepWithin(forces, x, v, t, dt, 0);
 }
 
-bool ImplicitSolver::stepWithin(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt,
+bool ImplicitSolver::stepWithin(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt,
                                 int depth) {
   if (depth < settings_.maxHalvings) {
     xSaved_[static_cast<std::size_t>(depth)] = x;
     vSaved_[static_cast<std::size_t>(depth)] = v;
   }
-  if (solve(world, x, v, t, dt)) return true;
+  if (solve(forces, x, v, t, dt)) return true;
   if (depth >= settings_.maxHalvings) return false;  // the smallest piece: keep its last iterate
   // Newton did not converge (a hinge folding through its wrap, a violent contact): retry the
   // step as two halves from the saved state.
   ++stats_.halvedSteps;
   x = xSaved_[static_cast<std::size_t>(depth)];
   v = vSaved_[static_cast<std::size_t>(depth)];
-  return stepWithin(world, x, v, t, 0.5 * dt, depth + 1) && stepWithin(world, x, v, t + 0.5 * dt, 0.5 * dt, depth + 1);
+  return stepWithin(forces, x, v, t, 0.5 * dt, depth + 1) && stepWithin(forces, x, v, t + 0.5 * dt, 0.5 * dt, depth + 1);
 }
 
-bool ImplicitSolver::solve(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt) {
-  const Model& model = world.model();
+bool ImplicitSolver::solve(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt) {
+  const Model& model = forces.model();
   for (std::size_t i = 0; i < n_; ++i) v0_[i] = v[i];
-  findContacts(world, x, t, dt);
+  findContacts(forces, x, t, dt);
   // The initial guess v0 already obeys the contacts (each lands on its surface); every Newton
   // update is then filtered, so they hold exactly throughout.
   for (uint32_t i : contacts_) v[i] += contactNormal_[i] * (contactSpeed_[i] - dot(v[i], contactNormal_[i]));
-  double rnorm = residual(world, x, v, t, dt);
+  double rnorm = residual(forces, x, v, t, dt);
   const double r0 = rnorm;
   bool converged = !(r0 > 0.0);
   const double* kv = K_.valuePtr();
@@ -397,7 +397,7 @@ bool ImplicitSolver::solve(const World& world, std::vector<Vec3>& x, std::vector
         const Eigen::Index k = static_cast<Eigen::Index>(3 * i);
         vTrial_[i] = v[i] + Vec3{dv_(k), dv_(k + 1), dv_(k + 2)} * alpha;
       }
-      trial = residual(world, x, vTrial_, t, dt);
+      trial = residual(forces, x, vTrial_, t, dt);
       if (trial < rnorm || ls == 5 || !std::isfinite(trial)) break;
       alpha *= 0.5;
     }

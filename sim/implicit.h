@@ -51,7 +51,7 @@
 
 namespace springy {
 
-class World;
+class Forces;
 
 using Matrix12 = Eigen::Matrix<double, 12, 12>;
 
@@ -96,7 +96,7 @@ class ImplicitSolver {
   // iterations the step is retried as two half steps, recursively up to maxHalvings deep;
   // returns false if even the smallest pieces did not converge (their last iterate is kept;
   // a non-finite state is left for the stability monitor to report).
-  bool step(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
+  bool step(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
 
   // Assembles K = df/dx and D = df/dv over all struts, hinges and drag at (x, v).
   void assemble(const Model& model, const Vec3* x, const Vec3* v, bool definite);
@@ -111,11 +111,11 @@ class ImplicitSolver {
   };
   Block findBlock(uint32_t a, uint32_t b) const;
   static void addBlock(Eigen::SparseMatrix<double>& m, const Block& blk, const Eigen::Matrix3d& values, double scale);
-  bool stepWithin(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt, int depth);
+  bool stepWithin(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt, int depth);
   // One backward Euler step by Newton's method; returns whether it converged.
-  bool solve(const World& world, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
+  bool solve(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
   // Evaluates rhs_ = -R(v) (filtered) for the step from x0; returns |R|.
-  double residual(const World& world, const std::vector<Vec3>& x0, const std::vector<Vec3>& v, double t, double dt);
+  double residual(const Forces& forces, const std::vector<Vec3>& x0, const std::vector<Vec3>& v, double t, double dt);
   // Solves A dv = rhs_ by filtered Jacobi-preconditioned CG; returns the iteration count.
   int solveCg(double absoluteFloor);
   // Removes the constrained components of a vector: pinned vertices entirely, contact vertices
@@ -129,7 +129,7 @@ class ImplicitSolver {
   // q += sum over gas bodies of c g (g . p).
   void addGasProduct(const Eigen::VectorXd& p, Eigen::VectorXd& q) const;
   // Finds the vertices whose predicted path hits a collider and sets their constraints.
-  void findContacts(const World& world, const std::vector<Vec3>& x0, double t, double dt);
+  void findContacts(const Forces& forces, const std::vector<Vec3>& x0, double t, double dt);
 
   ImplicitSettings settings_;
   ImplicitStats stats_;

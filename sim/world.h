@@ -1,17 +1,18 @@
 // springy: the world a scene builds, and its time step.
 //
 // The step reads as one ordered list of stages (Box2D's solver stages, MuJoCo's mj_forward):
-//   forces:    [gravity] [drag] [wind] [struts] [hinges] [gas] [deformation damping]
-//              (evaluated 1-4 times per step)
-//   integrate: the chosen integrator advances positions and velocities by dt
-//   collide:   [static colliders] [damping layers]         (continuous, earliest hit wins)
+//   forces:    Forces (sim/force_stages.h): [gravity] [drag] [wind] [struts] [hinges] [gas]
+//              [deformation damping], evaluated 1-4 times per step
+//   integrate: one function per integrator advances positions and velocities by dt
+//   collide:   [static colliders] [damping layers] (continuous, earliest hit wins), in the
+//              integrator's last pass over the vertices (lastPass: one fork-join for both)
 // A stage is in the list only if the scene uses it: no wind stage without wind, no hinge stage
 // for the legacy all-pairs model, no collision pass without colliders. An unused feature costs
 // nothing per step.
 //
 // Model (immutable) and state (positions, velocities, time) are separate; all scratch space
-// (force buffers, integrator stages, threads' work lists) is allocated once here, never
-// inside a step.
+// (force buffers, integrator stages, threads' work lists) is allocated once, never inside a
+// step.
 //
 // Threads (setThreads): force evaluation is split by vertex ownership and the per-vertex loops
 // by index ranges (sim/parallel.h), so every thread count gives bit-identical results.
@@ -23,10 +24,8 @@
 #include <string_view>
 #include <vector>
 
-#include "sim/forces.h"
-#include "sim/hinge.h"
+#include "sim/force_stages.h"
 #include "sim/model.h"
-#include "sim/parallel.h"
 
 namespace springy {
 
@@ -46,8 +45,6 @@ bool parseIntegrator(std::string_view name, Integrator& out);
 // Comma-separated list of all names, for error messages.
 std::string integratorNames();
 
-enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges, Gas, Deformation };
-std::string_view forceStageName(ForceStage stage);
 
 class ImplicitSolver;
 
@@ -68,33 +65,35 @@ class World {
   // slower than the other); below about 1000 per thread the fork-join overhead eats the gain.
   // Results are bit-identical for every count.
   static constexpr std::size_t kMinVerticesPerThread = 1000;
-  void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread);
-  unsigned threads() const { return pool_ ? pool_->size() : 1; }
+  void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread) {
+    forces_->setThreads(requested, minVerticesPerThread);
+  }
+  unsigned threads() const { return forces_->threads(); }
   // Elements evaluated per force evaluation over all threads, divided by the element count:
   // 1 with one thread, slightly above with more (elements on a boundary between threads).
-  double redundancy() const;
+  double redundancy() const { return forces_->redundancy(); }
 
   // Runs fn(begin, end) over [0, n) split into contiguous ranges among the world's threads,
   // the calling thread included (fork-join); for passes outside the step, such as the
   // measurements. fn must not throw.
   template <class F>
   void parallelFor(std::size_t n, F&& fn) const {
-    if (pool_) pool_->forRange(n, fn);
-    else fn(std::size_t{0}, n);
+    forces_->parallelFor(n, fn);
   }
 
   // Total force on every vertex for a given state and time, running the stage list.
-  void computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const;
+  void computeForces(const Vec3* x, const Vec3* v, double t, Vec3* f) const { forces_->evaluate(x, v, t, f); }
+  const Forces& forces() const { return *forces_; }
 
-  const Model& model() const { return model_; }
+  const Model& model() const { return *model_; }
   Integrator integrator() const { return integrator_; }
   double dt() const { return dt_; }
   double time() const { return time_; }
   uint64_t stepCount() const { return steps_; }
   const std::vector<Vec3>& positions() const { return x_; }
   const std::vector<Vec3>& velocities() const { return v_; }
-  const std::vector<ForceStage>& forceStages() const { return forceStages_; }
-  bool collides() const { return !model_.colliders.empty(); }
+  const std::vector<ForceStage>& forceStages() const { return forces_->stages(); }
+  bool collides() const { return !model_->colliders.empty(); }
   // The backward Euler solver (its statistics), or null for the explicit integrators.
   const ImplicitSolver* implicitSolver() const { return implicit_.get(); }
 
@@ -102,13 +101,7 @@ class World {
   void setState(std::vector<Vec3> x, std::vector<Vec3> v, double time = 0.0);
 
  private:
-  void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const;
-  // Gravity, when present, is the first stage and writes the forces; otherwise they start at 0.
-  bool startsWithGravity() const { return !forceStages_.empty() && forceStages_[0] == ForceStage::Gravity; }
-  // One thread's share of a force evaluation: the forces on its own vertices (a contiguous
-  // range), optionally divided by the masses, written to f. Threads write disjoint ranges.
-  void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
-                   bool toAcceleration) const;
+  void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const { forces_->accelerations(x, v, t, a); }
   // Runs fn(begin, end) over [0, vertexCount) split among the threads.
   template <class F>
   void forVertices(F&& fn) const;
@@ -121,37 +114,18 @@ class World {
   // Resolves the contacts of vertices [begin, end) along their paths xOld -> x; true if any
   // vertex touched a collider or a damping layer.
   bool collide(std::size_t begin, std::size_t end);
-  // The gas stage's pressures for positions x: each gas body's volume (chunks of faces summed
-  // by the threads, then the chunks' sums in order: enclosedVolume's number on every thread
-  // count), then its overpressure.
-  void updateGas(const Vec3* x) const;
-  // The deformation damping stage's rigid motions for the state (x, v): each damped body's mass
-  // moments (chunks of vertices summed by the threads, then in order), then its rigid fit.
-  void updateRigid(const Vec3* x, const Vec3* v) const;
-  // Both, before a force evaluation.
-  void prepareForces(const Vec3* x, const Vec3* v) const {
-    updateGas(x);
-    updateRigid(x, v);
-  }
-
-  // Asks for the positions (and velocities, if v is not null) of the vertices thread `thread`
-  // reads but does not own, ahead of the loops that read them.
-  void prefetchForeign(unsigned thread, const Vec3* x, const Vec3* v) const;
-
-  // A thread's share: the vertices it owns, [begin, end), the elements that touch them, and
-  // the other vertices of those elements (sorted).
-  struct Share {
-    std::size_t begin = 0, end = 0;
-    std::vector<ElementRef> struts, hinges, faces;
-    std::vector<uint32_t> foreign;
-  };
-
-  Model model_;
+  // One function per integrator: advances x_ and v_ by dt_ from time_, contacts included.
+  void stepExplicitEuler();
+  void stepSymplecticEuler();
+  void stepVelocityVerlet();
+  void stepLeapfrog();
+  void stepRK4();
+  void stepBackwardEuler();
+  std::unique_ptr<Model> model_;  // on the heap: Forces keeps its address across moves of the World
   Integrator integrator_;
   double dt_;
   double time_ = 0.0;
   uint64_t steps_ = 0;
-  std::vector<ForceStage> forceStages_;
   std::vector<Vec3> x_, v_;
   // Scratch, sized once.
   std::vector<Vec3> xOld_, a_, k1v_, k2x_, k2v_, k3x_, k3v_, k4v_, xs_, vs_, aNext_;
@@ -160,24 +134,7 @@ class World {
   bool dampingLayers_ = false;          // a plane has a damping layer (soft ground)
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
-  std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel
-  std::vector<uint32_t> gasBodies_;            // bodies that hold gas
-  struct VolumeChunk {
-    uint32_t body, begin, end;  // faces [begin, end) of a gas body
-  };
-  std::vector<VolumeChunk> volumeChunks_;      // in body and face order
-  mutable std::vector<double> chunkSum_;       // per chunk: six times its volume
-  mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
-  mutable std::vector<Vec3> areaVectors_;      // per face of a gas body: N of sixVolume, same evaluation
-  VertexFaces facesAround_;                    // the gas stage's faces per vertex
-  struct VertexChunk {
-    uint32_t body, begin, end;  // vertices [begin, end) of a body with deformation damping
-  };
-  std::vector<VertexChunk> rigidChunks_;        // in body and vertex order
-  mutable std::vector<MassMoments> chunkMoments_;  // per chunk, for the evaluation under way
-  mutable std::vector<RigidMotion> rigid_;      // per body (rate 0: not damped)
-  std::unique_ptr<ThreadPool> pool_;           // null: one thread
-  std::vector<Share> shares_;                  // one per thread when pool_ is set
+  std::unique_ptr<Forces> forces_;          // the force stages, their scratch and the threads
 };
 
 }  // namespace springy

@@ -1,0 +1,108 @@
+// springy: the force stages of a model, evaluated for any state: what World's integrators and
+// the implicit solver call for f(x, v, t).
+//
+// The stage list is assembled once from the model, in a fixed order, and holds only what the
+// scene uses (no wind stage without wind, no hinge stage for the legacy all-pairs model):
+//   [gravity] [drag] [wind] [struts] [hinges] [gas] [deformation damping]
+// Adding a force kind: its kernel in its own file (as sim/strut.h, sim/hinge.h, sim/forces.h),
+// a ForceStage value with its name, and one case in each of the two stage loops below
+// (evaluate's, for one thread, and ownedForces', a thread's own vertices).
+//
+// Threads (setThreads): the evaluation is split by vertex ownership (each thread computes the
+// forces on its own contiguous range of vertices from the elements that touch them), and the
+// per-body sums (the gas's volume, the deformation damping's moments) in fixed chunks summed in
+// order, so every thread count gives bit-identical results. All scratch is allocated here, once.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string_view>
+#include <vector>
+
+#include "sim/forces.h"
+#include "sim/hinge.h"
+#include "sim/model.h"
+#include "sim/parallel.h"
+
+namespace springy {
+
+enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges, Gas, Deformation };
+std::string_view forceStageName(ForceStage stage);
+
+class Forces {
+ public:
+  // Reads `model` (which must outlive this object and not move) at every evaluation.
+  explicit Forces(const Model& model);
+
+  // Total force on every vertex for a state (x, v) at time t, running the stage list.
+  void evaluate(const Vec3* x, const Vec3* v, double t, Vec3* f) const;
+  // The same divided by the masses (0 for pinned vertices).
+  void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const;
+
+  const std::vector<ForceStage>& stages() const { return stages_; }
+  const Model& model() const { return *model_; }
+
+  // Up to `requested` threads (the calling thread included), fewer when the model has under
+  // `minVerticesPerThread` vertices per thread (see World::kMinVerticesPerThread).
+  void setThreads(unsigned requested, std::size_t minVerticesPerThread);
+  unsigned threads() const { return pool_ ? pool_->size() : 1; }
+  // Elements evaluated per evaluation over all threads, divided by the element count.
+  double redundancy() const;
+  // Runs fn(begin, end) over [0, n) split into contiguous ranges among the threads.
+  template <class F>
+  void parallelFor(std::size_t n, F&& fn) const {
+    if (pool_) pool_->forRange(n, fn);
+    else fn(std::size_t{0}, n);
+  }
+
+ private:
+  // Gravity, when present, is the first stage and writes the forces; otherwise they start at 0.
+  bool startsWithGravity() const { return !stages_.empty() && stages_[0] == ForceStage::Gravity; }
+  // One thread's share of an evaluation: the forces on its own vertices (a contiguous range),
+  // optionally divided by the masses, written to f. Threads write disjoint ranges.
+  void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
+                   bool toAcceleration) const;
+  // The per-body sums the stages need before the forces: each gas body's volume and
+  // overpressure (chunks of faces summed by the threads, then the chunks' sums in order), and
+  // each damped body's rigid motion (chunks of vertices likewise).
+  void updateGas(const Vec3* x) const;
+  void updateRigid(const Vec3* x, const Vec3* v) const;
+  void prepare(const Vec3* x, const Vec3* v) const {
+    updateGas(x);
+    updateRigid(x, v);
+  }
+  // Asks for the positions (and velocities, if v is not null) of the vertices thread `thread`
+  // reads but does not own, ahead of the loops that read them.
+  void prefetchForeign(unsigned thread, const Vec3* x, const Vec3* v) const;
+
+  // A thread's share: the vertices it owns, [begin, end), the elements that touch them, and
+  // the other vertices of those elements (sorted).
+  struct Share {
+    std::size_t begin = 0, end = 0;
+    std::vector<ElementRef> struts, hinges, faces;
+    std::vector<uint32_t> foreign;
+  };
+
+  const Model* model_;
+  std::vector<ForceStage> stages_;
+  std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel
+  std::vector<uint32_t> gasBodies_;            // bodies that hold gas
+  struct VolumeChunk {
+    uint32_t body, begin, end;  // faces [begin, end) of a gas body
+  };
+  std::vector<VolumeChunk> volumeChunks_;      // in body and face order
+  mutable std::vector<double> chunkSum_;       // per chunk: six times its volume
+  mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
+  mutable std::vector<Vec3> areaVectors_;      // per face of a gas body: N of sixVolume, same evaluation
+  VertexFaces facesAround_;                    // the gas stage's faces per vertex
+  struct VertexChunk {
+    uint32_t body, begin, end;  // vertices [begin, end) of a body with deformation damping
+  };
+  std::vector<VertexChunk> rigidChunks_;        // in body and vertex order
+  mutable std::vector<MassMoments> chunkMoments_;  // per chunk, for the evaluation under way
+  mutable std::vector<RigidMotion> rigid_;      // per body (rate 0: not damped)
+  std::unique_ptr<ThreadPool> pool_;           // null: one thread
+  std::vector<Share> shares_;                  // one per thread when pool_ is set
+};
+
+}  // namespace springy

@@ -19,6 +19,8 @@
 #include "sim/error.h"
 #include "sim/hinge.h"
 #include "sim/shapes.h"
+#include "sim/cases.h"
+#include "sim/harness.h"
 #include "sim/stability.h"
 
 namespace springy {

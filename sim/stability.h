@@ -21,14 +21,11 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <limits>
-#include <string>
 #include <vector>
 
 #include "sim/model.h"
 #include "sim/world.h"
-#include "sim/monitor.h"
 
 namespace springy {
 
@@ -85,50 +82,5 @@ StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x
 
 // Substeps that bring dt below safety * dtMax (at least 1).
 int safeSubsteps(double dt, double dtMax, double safety = 0.9);
-
-// Measurement: one run of `horizon` seconds under the stability monitor (finite, no blow-up
-// beyond 10 times the rest size, energy never more than its scale above the start; checked
-// every few steps and at the end).
-struct RunOutcome {
-  bool stable = true;
-  std::string failure;   // the monitor's message when not stable
-  std::string kind;      // "nan", "blow-up", "energy", "penetration", "volume" or "" when stable
-  uint64_t step = 0;     // the step at which it failed
-  bool finiteAtEnd = true;  // every position and velocity finite when the run stopped
-};
-RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, double horizon,
-                        const std::vector<Vec3>* initialPositions = nullptr);
-
-// Largest stable step found by bisection (in log dt) between a stable and an unstable step
-// bracketing `guess`; `failure` is what failed first just above it. dt is capped at maxDt
-// (reported with capped = true when still stable there).
-struct MeasuredStep {
-  double dt = 0;
-  bool capped = false;
-  RunOutcome above;  // the run just above the limit
-};
-MeasuredStep largestStableStep(const Model& model, Integrator integrator, double horizon, double guess, double maxDt,
-                               const std::vector<Vec3>* initialPositions = nullptr, int iterations = 10);
-
-// The stiff and extreme cases of the stability study (`springy study stability`) and its tests.
-struct StabilityCase {
-  std::string name;
-  std::string description;
-  Model model;
-  std::vector<Vec3> positions;  // the state at t = 0 (may differ from the rest shape)
-};
-struct CaseFactory {
-  std::string name;
-  bool degenerate = false;  // must be refused at load
-  bool stiff = false;       // every explicit integrator needs steps 100 times below 1/60 s
-  std::function<StabilityCase()> make;  // throws springy::Error when refused
-};
-// Two unit masses on one strut of period P and decay time T (decay 0: undamped), released
-// stretched by 10 %.
-StabilityCase strutCase(double period, double decay);
-// Two triangles on one hinge (period P_theta, decay T_theta; 0: undamped) with struts of period 2 P_theta,
-// rest angle restAngle, released at startAngle.
-StabilityCase hingeCase(double period, double decay, double restAngle = 0.5, double startAngle = 0.9);
-std::vector<CaseFactory> stabilityCases();
 
 }  // namespace springy

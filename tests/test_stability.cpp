@@ -6,6 +6,8 @@
 
 #include "fixtures.h"
 #include "sim/error.h"
+#include "sim/cases.h"
+#include "sim/harness.h"
 #include "sim/stability.h"
 
 namespace springy {

@@ -1,0 +1,39 @@
+// springy: runs under the stability monitor, and the largest stable step found by bisection:
+// what the stability study (`springy study stability`), its tests and docs/stability.md
+// measure the advisor (sim/stability.h) against.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/model.h"
+#include "sim/world.h"
+
+namespace springy {
+
+// Measurement: one run of `horizon` seconds under the stability monitor (finite, no blow-up
+// beyond 10 times the rest size, energy never more than its scale above the start; checked
+// every few steps and at the end).
+struct RunOutcome {
+  bool stable = true;
+  std::string failure;   // the monitor's message when not stable
+  std::string kind;      // "nan", "blow-up", "energy", "penetration", "volume" or "" when stable
+  uint64_t step = 0;     // the step at which it failed
+  bool finiteAtEnd = true;  // every position and velocity finite when the run stopped
+};
+RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, double horizon,
+                        const std::vector<Vec3>* initialPositions = nullptr);
+
+// Largest stable step found by bisection (in log dt) between a stable and an unstable step
+// bracketing `guess`; `failure` is what failed first just above it. dt is capped at maxDt
+// (reported with capped = true when still stable there).
+struct MeasuredStep {
+  double dt = 0;
+  bool capped = false;
+  RunOutcome above;  // the run just above the limit
+};
+MeasuredStep largestStableStep(const Model& model, Integrator integrator, double horizon, double guess, double maxDt,
+                               const std::vector<Vec3>* initialPositions = nullptr, int iterations = 10);
+
+}  // namespace springy

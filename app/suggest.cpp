@@ -199,9 +199,12 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
                                           : std::string())
         << ")\n";
   } else if (choice == StepChoice::Default) {
-    scene.substeps = safeSubsteps(scene.dt, r.dtMax, kImpactMargin);
+    const bool element = std::any_of(scene.bodies.begin(), scene.bodies.end(),
+                                     [](const BodyDesc& d) { return d.material == MaterialModel::Element; });
+    const double margin = element ? kImpactMarginElement : kImpactMargin;
+    scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
-        << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << kImpactMargin
+        << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << margin
         << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)
         << " (body '" << body << "'), a margin for impacts\n";
   } else if (stepSize(scene) > r.dtMax) {

@@ -143,6 +143,13 @@ TEST(Suggest, PredictsTheSquashAndPeriodsThatKeepTheVolume) {
   EXPECT_NE(soft.output.find("shorter bend_period or stretch_period"), std::string::npos) << soft.output;
   const Result stiffer = run("check " + (dir / "stiffer.toml").string() + " --min-volume 0.85");
   EXPECT_EQ(stiffer.status, 0) << stiffer.output;
+  // With no step in the scene, springy chooses one with a margin for impacts: 0.5 of the
+  // estimate for the body material, 0.2 when a body has the element material.
+  EXPECT_NE(soft.output.find("at most 0.5 of the estimated stable limit"), std::string::npos) << soft.output;
+  std::ofstream(dir / "element.toml") << ball << "strut_period = 0.07\n[[plane]]\n";
+  const Result element = run("check " + (dir / "element.toml").string() + " --duration 0.1");
+  EXPECT_EQ(element.status, 0) << element.output;
+  EXPECT_NE(element.output.find("at most 0.2 of the estimated stable limit"), std::string::npos) << element.output;
   // A body that holds its shape is said to.
   std::ofstream(dir / "default.toml") << ball << "[[plane]]\n";
   const Result plain = run("suggest " + (dir / "default.toml").string());

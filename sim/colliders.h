@@ -1,13 +1,13 @@
 // springy: static colliders and continuous vertex contact.
 //
 // One interface for every static collider (the seed had planes and triangles in two code
-// paths that could not be combined): after each step, every vertex's path from its old to its
-// new position is tested against all colliders, and the EARLIEST hit along the path wins. A
-// plane is a solid half-space (one-sided); a triangle mesh is a set of thin two-sided plates
-// searched through a bounding volume hierarchy. At a hit the vertex is put back on the
-// surface (plus a tiny skin), its velocity gets the collider's restitution along the normal
-// and Coulomb friction along the surface (an impulse no larger than mu times the normal
-// impulse), and the rest of its path continues as sliding along the surface.
+// paths that could not be combined; docs/model.md §7, §14): after each step, every vertex's
+// path from its old to its new position is tested against all colliders, and the EARLIEST hit
+// along the path wins. A plane is a solid half-space (one-sided); a triangle mesh is a set of
+// thin two-sided plates searched through a bounding volume hierarchy. At a hit the vertex is
+// put back on the surface (plus a tiny skin), its velocity gets the collider's restitution
+// along the normal and Coulomb friction along the surface (an impulse no larger than mu times
+// the normal impulse), and the rest of its path continues as sliding along the surface.
 //
 // Contact never adds kinetic energy: the normal speed after contact is at most the speed
 // before (restitution <= 1) and friction only removes tangential speed. Restitution applies

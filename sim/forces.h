@@ -15,8 +15,9 @@ namespace springy {
 // to (instead of zeros and an addition: one pass fewer).
 void setGravity(const Model& model, std::size_t begin, std::size_t end, Vec3* f);
 
-// f_i += -c m_i (v_i - w): linear drag relative to the air (w = 0 without wind), seed 3.2's
-// "plain velocity drag" made independent of mesh resolution by scaling with the vertex mass.
+// f_i += -c m_i (v_i - w): linear drag relative to the air (w = 0 without wind), the seed's
+// "plain velocity drag" made independent of mesh resolution by scaling with the vertex mass
+// (docs/model.md §6, eq. A9).
 void applyDrag(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* v, Vec3* f);
 
 // Wind pressure on faces [begin, end): a face turned into the relative wind (w - v_face) . n < 0
@@ -27,7 +28,8 @@ void applyWindPressure(const Model& model, std::size_t begin, std::size_t end, c
 void applyWindPressureOwned(const Model& model, const ElementRef* list, std::size_t count, const Vec3& air,
                        const Vec3* x, const Vec3* v, Vec3* f);
 
-// Enclosed gas (MODEL.md 1.9; Matyka & Ollila 2004, "Pressure model of soft body simulation"):
+// Enclosed gas (docs/model.md §11, eq. A12-A16; Matyka & Ollila 2004, "Pressure model of soft
+// body simulation"):
 // an isothermal ideal gas, p V = const, inside a closed body, at the ambient pressure p0 when
 // the volume is the rest volume V0. Its pressure over the ambient, p = p0 (V0 / V - 1), pushes
 // every face outward; the volume is exact by the divergence theorem, V = 1/6 sum_f x0 . (x1 x x2)

@@ -1,17 +1,19 @@
-// springy: torsion (hinge) springs across shared edges (seed eq. 5-20).
+// springy: torsion (hinge) springs across shared edges (docs/model.md §3, eq. S5-S20, A1-A5).
 //
 // The hinge edge runs from v0 to v1; v2 is the third vertex of the left face (v0, v1, v2) and
 // v3 of the right face (v1, v0, v3), both outward-oriented. With h the unit edge direction,
 // n_l, n_r the unit outward normals and r_l, r_r the perpendiculars from the hinge line to v2
 // and v3, the signed dihedral angle is
 //   theta = atan2((n_l x n_r) . h, n_l . n_r)      (0 when flat, > 0 when convex)
-// and its gradient with respect to the four vertices (the seed's force directions) is
+// and its gradient with respect to the four vertices (the directions of the seed's forces,
+// docs/model.md eq. S16-S20) is
 //   g2 = -n_l / |r_l|,  g3 = -n_r / |r_r|,
 //   g1 = -((x02 . h) g2 + (x03 . h) g3) / |x01|,  g0 = -(g1 + g2 + g3).
 // The force is f_i = -(k (theta - theta0) + d dtheta/dt) g_i with dtheta/dt = sum g_i . v_i,
 // the true rate of change of the angle: it is zero for every rigid motion, so rigid motion
 // feels no damping, and the damping power -d (dtheta/dt)^2 never adds energy. (The seed used
-// the wing vertices' absolute normal velocities, which damps plain translation.)
+// the wing vertices' absolute normal velocities, which damps plain translation: docs/model.md,
+// eq. S11-S13 against A2.)
 // The forces sum to zero and have zero net torque because g is the gradient of a function
 // invariant under rigid motion.
 //

@@ -144,7 +144,7 @@ void addBody(Model& model, const BodyDesc& desc) {
   info.restSize = size;
   const uint32_t base = info.firstVertex;
 
-  // Mass: angle-weighted area (seed 3.3.1) or uniform.
+  // Mass: angle-weighted area (docs/model.md §4, eq. A6) or uniform.
   std::vector<double> m(nv, desc.mass / static_cast<double>(nv));
   if (desc.massDistribution == MassDistribution::AngleWeightedArea) {
     const std::vector<double> share = angleWeightedAreas(mesh);

@@ -21,7 +21,7 @@
 
 namespace springy {
 
-// A damped spring between two vertices (seed eq. 1-4; House & Keyser, springy meshes).
+// A damped spring between two vertices (docs/model.md, eq. S1-S4; House & Keyser, springy meshes).
 struct Strut {
   uint32_t i, j;
   double restLength;  // [m]
@@ -30,9 +30,9 @@ struct Strut {
 };
 
 // A torsion spring about the edge v0 -> v1 shared by the faces (v0, v1, v2) and (v1, v0, v3)
-// (seed eq. 5-20). The angle is the signed dihedral angle between the two outward face
-// normals, measured with the same function that computes the forces, so the rest angle is in
-// the forces' own convention.
+// (docs/model.md, eq. S5-S20, A1-A5). The angle is the signed dihedral angle between the two
+// outward face normals, measured with the same function that computes the forces, so the rest
+// angle is in the forces' own convention.
 struct Hinge {
   uint32_t v[4];
   double restAngle;  // theta0 [rad]
@@ -44,15 +44,16 @@ struct Hinge {
 enum class SpringModel {
   Springy,   // struts on mesh edges + hinges on interior edges
   AllPairs,  // the seed's legacy model: struts between every pair of vertices, no hinges
+             // (docs/model.md §9)
 };
 
 enum class MassDistribution { AngleWeightedArea, Uniform };
 
 // How a body's stiffness and damping are given.
 enum class MaterialModel {
-  // The seed's (eq. 22-25): every strut and hinge gets its own period and decay time, as a mass
-  // on that one spring. A body's behaviour then changes with its mesh: for given periods the
-  // bending stiffness falls with the cube of the mesh spacing.
+  // The seed's (docs/model.md, eq. S22-S25): every strut and hinge gets its own period and
+  // decay time, as a mass on that one spring. A body's behaviour then changes with its mesh:
+  // for given periods the bending stiffness falls with the cube of the mesh spacing.
   Element,
   // A material of the body, the same at every resolution: a membrane modulus and a bending
   // modulus, each element's constant scaled by its rest geometry (struts Y A_e / l^2, hinges
@@ -89,7 +90,8 @@ struct BodyDesc {
   SpringModel model = SpringModel::Springy;
   MassDistribution massDistribution = MassDistribution::AngleWeightedArea;
   double mass = 1.0;  // total [kg]
-  // Either periods and decay times (seed eq. 22-25) or direct constants; direct wins when set.
+  // Either periods and decay times (docs/model.md, eq. S22-S25) or direct constants; direct wins
+  // when set.
   double strutDecay = 0.03, strutPeriod = 0.07;  // T, P [s]
   double hingeDecay = 2.0, hingePeriod = 0.5;    // T_theta, P_theta [s]; hingePeriod <= 0: no hinges
   std::optional<double> strutStiffness, strutDamping, hingeStiffness, hingeDamping;
@@ -186,10 +188,12 @@ void volumeGradient(const Model& model, const BodyInfo& body, const Vec3* x, Vec
 double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x);
 
 // Area share of each vertex of a mesh: each face gives its area to its corners in proportion
-// to the corner's interior angle (angle / pi), seed 3.3.1. Sums to the total surface area.
+// to the corner's interior angle (angle / pi), docs/model.md §4, eq. A6. Sums to the total
+// surface area.
 std::vector<double> angleWeightedAreas(const TriMesh& mesh);
 
-// Seed eq. 22-25: spring constants from a period P and a decay time T for a mass m.
+// docs/model.md, eq. S22-S25 (the seed's): spring constants from a period P and a decay time T
+// for a mass m.
 // P is the period of a mass m on the spring against a fixed end; T the time in which the
 // amplitude falls by a factor e. r is the lever arm of a torsion spring.
 inline double stiffnessFromPeriod(double m, double period) { return m * (2 * kPi / period) * (2 * kPi / period); }

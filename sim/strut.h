@@ -1,4 +1,4 @@
-// springy: damped springs along struts (seed eq. 1-4).
+// springy: damped springs along struts (docs/model.md, eq. S1-S4).
 //
 //   x_ij = x_j - x_i, l = |x_ij|, u = x_ij / l
 //   f_i = k (l - l0) u + d ((v_j - v_i) . u) u,   f_j = -f_i

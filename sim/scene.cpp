@@ -325,7 +325,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   // Ranges that keep every derived constant finite and positive (a period of 1e-300 s or a mass
   // of 1e-300 kg overflows the stiffness or underflows the frequency).
   b.mass = r.inRange("mass", b.mass, kMinMass, kMaxMass);
-  // Material: the body's own (resolution independent, the default) or the seed's per element,
+  // Material: the body's own (resolution independent, the default) or the seed's per element (docs/model.md §5),
   // which any element key selects (the showcase scenes' values keep their meaning).
   static const char* const elementKeys[] = {"strut_period", "strut_decay", "hinge_period", "hinge_decay",
                                             "strut_stiffness", "strut_damping", "hinge_stiffness", "hinge_damping"};

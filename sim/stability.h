@@ -1,6 +1,6 @@
 // springy: the stability advisor. Before running, estimate each body's highest natural
 // frequency and strongest damping rate, and from them the largest stable time step of the
-// chosen integrator; propose parameters for a given time step (the seed's future work 4.4).
+// chosen integrator; propose parameters for a given time step (the seed's future work, docs/model.md §15).
 //
 // Estimate. The stiffest mode of a body is an eigenvector of M^-1/2 K M^-1/2 (and of the
 // damping matrix D likewise). Gershgorin's theorem bounds every eigenvalue by the largest row

@@ -57,7 +57,7 @@ Oscillation measureStrut(World& world, double restLength, double seconds) {
 }
 
 TEST(Strut, OneFreeMassOscillatesWithPeriodPAndDecayT) {
-  // The seed's conversion (eq. 22-25) is for a mass m on the spring against a fixed end.
+  // The seed's conversion (docs/model.md eq. S22-S25) is for a mass m on the spring against a fixed end.
   const double m = 0.5, P = 0.2, T = 0.5, L = 1.0;
   Model model = test::strutModel(m, m, L, stiffnessFromPeriod(m, P), dampingFromDecay(m, T), /*pinFirst=*/true);
   World world(std::move(model), Integrator::RK4, 1e-4);

@@ -14,7 +14,7 @@
 #include "app/bounded_queue.h"
 #include "app/progress.h"
 #include "app/runner.h"
-#include "render/error.hpp"
+#include "render/error.h"
 
 namespace springy {
 namespace {

@@ -17,7 +17,7 @@
 #include <string>
 
 #include "app/scene_view.h"
-#include "render/video_encoder.hpp"
+#include "render/video_encoder.h"
 #include "sim/monitor.h"
 
 namespace springy {

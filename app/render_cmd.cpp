@@ -18,9 +18,9 @@
 #include "app/commands.h"
 #include "app/frame_pipeline.h"
 #include "app/scene_view.h"
-#include "render/error.hpp"
-#include "render/image.hpp"
-#include "render/video_encoder.hpp"
+#include "render/error.h"
+#include "render/image.h"
+#include "render/video_encoder.h"
 #include "sim/error.h"
 
 namespace springy {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "render/renderer.hpp"
+#include "render/renderer.h"
 #include "sim/scene.h"
 
 namespace springy {

@@ -1,11 +1,11 @@
-#include "render/camera.hpp"
+#include "render/camera.h"
 
 #include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 #include <string>
 
-#include "render/error.hpp"
+#include "render/error.h"
 
 namespace springy::render {
 

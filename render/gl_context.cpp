@@ -1,4 +1,4 @@
-#include "render/gl_context.hpp"
+#include "render/gl_context.h"
 
 #include <GL/osmesa.h>
 #include <GL/gl.h>
@@ -7,7 +7,7 @@
 #include <cstring>
 #include <string>
 
-#include "render/error.hpp"
+#include "render/error.h"
 
 namespace springy::render {
 

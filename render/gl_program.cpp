@@ -1,8 +1,8 @@
-#include "render/gl_program.hpp"
+#include "render/gl_program.h"
 
 #include <algorithm>
 
-#include "render/error.hpp"
+#include "render/error.h"
 
 namespace springy::render {
 

@@ -1,4 +1,4 @@
-#include "render/image.hpp"
+#include "render/image.h"
 
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
@@ -11,7 +11,7 @@
 #include <cstring>
 #include <memory>
 
-#include "render/error.hpp"
+#include "render/error.h"
 
 namespace springy::render {
 

@@ -1,4 +1,4 @@
-#include "render/mesh_builders.hpp"
+#include "render/mesh_builders.h"
 
 #include <cmath>
 #include <glm/gtc/constants.hpp>

@@ -1,4 +1,4 @@
-#include "render/renderer.hpp"
+#include "render/renderer.h"
 
 #include <GL/osmesa.h>
 #include <GL/gl.h>
@@ -10,11 +10,11 @@
 #include <optional>
 #include <string>
 
-#include "render/error.hpp"
-#include "render/gl_context.hpp"
-#include "render/gl_program.hpp"
-#include "render/shaders.hpp"
-#include "render/shadow_fit.hpp"
+#include "render/error.h"
+#include "render/gl_context.h"
+#include "render/gl_program.h"
+#include "render/shaders.h"
+#include "render/shadow_fit.h"
 
 namespace springy::render {
 
@@ -369,7 +369,7 @@ struct Renderer::Impl {
   }
 
   // Depth from the light of every drawable mesh but the grounds, into the shadow map fitted to
-  // them (shadow_fit.hpp). Returns whether the frame has shadows (off, or nothing casts).
+  // them (shadow_fit.h). Returns whether the frame has shadows (off, or nothing casts).
   bool shadowPass() {
     frameUniforms.lightVP = glm::mat4(1.0f);
     frameUniforms.normalOffset = 0.0f;

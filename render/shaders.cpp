@@ -1,5 +1,5 @@
-// The GLSL sources of the renderer's programs (see shaders.hpp).
-#include "render/shaders.hpp"
+// The GLSL sources of the renderer's programs (see shaders.h).
+#include "render/shaders.h"
 
 namespace springy::render {
 

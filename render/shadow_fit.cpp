@@ -1,4 +1,4 @@
-#include "render/shadow_fit.hpp"
+#include "render/shadow_fit.h"
 
 #include <algorithm>
 #include <cmath>

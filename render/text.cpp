@@ -1,4 +1,4 @@
-#include "render/text.hpp"
+#include "render/text.h"
 
 #include <stb/stb_truetype.h>
 
@@ -7,7 +7,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "render/error.hpp"
+#include "render/error.h"
 
 namespace springy::render {
 

@@ -1,4 +1,4 @@
-#include "render/video_encoder.hpp"
+#include "render/video_encoder.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -14,7 +14,7 @@ extern "C" {
 #include <cstddef>
 #include <mutex>
 
-#include "render/error.hpp"
+#include "render/error.h"
 
 namespace springy::render {
 

@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "render/image.hpp"
-#include "render/mesh_builders.hpp"
-#include "render/renderer.hpp"
-#include "render/video_encoder.hpp"
+#include "render/image.h"
+#include "render/mesh_builders.h"
+#include "render/renderer.h"
+#include "render/video_encoder.h"
 
 using namespace springy::render;
 

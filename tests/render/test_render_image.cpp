@@ -5,9 +5,9 @@
 #include <string>
 #include <unistd.h>
 
-#include "render/error.hpp"
-#include "render/image.hpp"
-#include "test_util.hpp"
+#include "render/error.h"
+#include "render/image.h"
+#include "test_util.h"
 
 using namespace springy::render;
 namespace fs = std::filesystem;

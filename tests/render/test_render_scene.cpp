@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "render/camera.hpp"
-#include "render/error.hpp"
-#include "render/image.hpp"
-#include "render/mesh_builders.hpp"
-#include "render/renderer.hpp"
-#include "test_util.hpp"
+#include "render/camera.h"
+#include "render/error.h"
+#include "render/image.h"
+#include "render/mesh_builders.h"
+#include "render/renderer.h"
+#include "test_util.h"
 
 using namespace springy::render;
 using springy::render::test::luminance;

@@ -23,10 +23,10 @@ extern "C" {
 #include <mutex>
 #include <thread>
 
-#include "render/error.hpp"
-#include "render/renderer.hpp"
-#include "render/mesh_builders.hpp"
-#include "render/video_encoder.hpp"
+#include "render/error.h"
+#include "render/renderer.h"
+#include "render/mesh_builders.h"
+#include "render/video_encoder.h"
 
 using namespace springy::render;
 namespace fs = std::filesystem;

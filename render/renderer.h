@@ -15,10 +15,10 @@
 #include <utility>
 #include <vector>
 
-#include "render/camera.hpp"
-#include "render/mesh_builders.hpp"
-#include "render/row_order.hpp"
-#include "render/text.hpp"
+#include "render/camera.h"
+#include "render/mesh_builders.h"
+#include "render/row_order.h"
+#include "render/text.h"
 
 namespace springy::render {
 

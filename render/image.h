@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "render/text.hpp"
+#include "render/text.h"
 
 namespace springy::render {
 

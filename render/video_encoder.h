@@ -10,7 +10,7 @@
 #include <span>
 #include <string>
 
-#include "render/row_order.hpp"
+#include "render/row_order.h"
 
 namespace springy::render {
 

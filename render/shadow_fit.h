@@ -9,8 +9,8 @@
 #include <limits>
 #include <optional>
 
-#include "render/camera.hpp"
-#include "render/renderer.hpp"
+#include "render/camera.h"
+#include "render/renderer.h"
 
 namespace springy::render {
 

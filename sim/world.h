@@ -59,10 +59,8 @@ class World {
   void step();
 
   // Runs the step on up to `requested` threads (the calling thread included). Fewer are used
-  // when the model has under `minVerticesPerThread` vertices per thread: measured on a 2-core
-  // VM (docs/benchmarks.md), two threads make an RK4 step 1.3-1.5x faster at 642 vertices,
-  // 1.6-1.7x at 2562, 1.7-1.9x from 10k on (less in periods when the host runs one core
-  // slower than the other); below about 1000 per thread the fork-join overhead eats the gain.
+  // when the model has under `minVerticesPerThread` vertices per thread: below about that the
+  // fork-join overhead eats the gain (the measured speed-ups per size are in docs/benchmarks.md).
   // Results are bit-identical for every count.
   static constexpr std::size_t kMinVerticesPerThread = 1000;
   void setThreads(unsigned requested, std::size_t minVerticesPerThread = kMinVerticesPerThread) {

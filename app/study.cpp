@@ -131,21 +131,8 @@ AccuracyCase strutAccuracy(double damping) {
   c.name = damping > 0 ? "strut" : "strut (undamped)";
   c.description = "two masses (1, 0.5 kg), one strut k = 30 N/m, d = " + fmt("%g", d) +
                   " N s/m, released stretched 10 %; reference: closed form";
-  Model& m = c.model;
-  m.gravity = {};
-  m.mass = {m0, m1};
-  m.invMass = {1 / m0, 1 / m1};
-  m.restPosition = {{0, 0, 0}, {l0, 0, 0}};
-  m.initialVelocity = {{}, {}};
-  m.body = {0, 0};
-  m.struts = {{0, 1, l0, k, d}};
-  BodyInfo info;
-  info.name = "strut";
-  info.vertexCount = 2;
-  info.strutCount = 1;
-  info.mass = m0 + m1;
-  info.restSize = l0;
-  m.bodies = {info};
+  c.model = strutModel(m0, m1, l0, k, d, false);
+  c.model.bodies[0].restSize = l0;
   const double y0 = 0.1, L = l0 + y0;
   // Centre of mass at the origin's side: x0 = -m1/M L, x1 = m0/M L keeps it at 0.
   const double M = m0 + m1;

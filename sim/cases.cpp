@@ -9,6 +9,80 @@
 
 namespace springy {
 
+// One free vertex of the given mass, no colliders.
+Model vertexModel(const Vec3& position, const Vec3& velocity, const Vec3& gravity, double mass) {
+  Model model;
+  model.gravity = gravity;
+  model.mass = {mass};
+  model.invMass = {1.0 / mass};
+  model.restPosition = {position};
+  model.initialVelocity = {velocity};
+  model.body = {0};
+  BodyInfo info;
+  info.name = "vertex";
+  info.vertexCount = 1;
+  info.mass = mass;
+  model.bodies = {info};
+  return model;
+}
+
+// Two vertices joined by one strut along x, no gravity, no colliders.
+Model strutModel(double m0, double m1, double restLength, double k, double d, bool pinFirst) {
+  Model model;
+  model.gravity = {};
+  model.mass = {m0, m1};
+  model.invMass = {pinFirst ? 0.0 : 1.0 / m0, 1.0 / m1};
+  model.restPosition = {{0, 0, 0}, {restLength, 0, 0}};
+  model.initialVelocity = {{}, {}};
+  model.body = {0, 0};
+  model.struts = {{0, 1, restLength, k, d}};
+  BodyInfo info;
+  info.name = "strut";
+  info.vertexCount = 2;
+  info.strutCount = 1;
+  info.mass = m0 + m1;
+  model.bodies = {info};
+  if (pinFirst) model.pinned = {0};
+  return model;
+}
+
+// Two triangles (0, 1, 2) and (1, 0, 3) sharing the edge 0-1 along x, folded to `angle`
+// (the signed dihedral angle), unit masses, one hinge, optionally the five struts.
+std::vector<Vec3> hingePositions(double angle) {
+  // Left wing in the y > 0 half-plane tilted down by angle/2, right wing mirrored: the
+  // dihedral angle of this pair is `angle` (positive = convex, normals along +z when flat).
+  const double a = angle / 2;
+  return {{0, 0, 0}, {1, 0, 0}, {0.4, std::cos(a), -std::sin(a)}, {0.6, -std::cos(a), -std::sin(a)}};
+}
+
+Model hingeModel(double restAngle, double k, double d, bool withStruts, double strutK,
+                         double strutD) {
+  Model model;
+  model.gravity = {};
+  model.mass = {1, 1, 1, 1};
+  model.invMass = {1, 1, 1, 1};
+  model.restPosition = hingePositions(restAngle);
+  model.initialVelocity = std::vector<Vec3>(4);
+  model.body = {0, 0, 0, 0};
+  model.faces = {{0, 1, 2}, {1, 0, 3}};
+  model.hinges = {{{0, 1, 2, 3}, restAngle, k, d}};
+  if (withStruts) {
+    const auto& p = model.restPosition;
+    for (auto [i, j] : std::vector<std::pair<uint32_t, uint32_t>>{{0, 1}, {0, 2}, {1, 2}, {0, 3}, {1, 3}}) {
+      model.struts.push_back({i, j, length(p[j] - p[i]), strutK, strutD});
+    }
+  }
+  BodyInfo info;
+  info.name = "hinge";
+  info.vertexCount = 4;
+  info.strutCount = static_cast<uint32_t>(model.struts.size());
+  info.hingeCount = 1;
+  info.faceCount = 2;
+  info.mass = 4;
+  model.bodies = {info};
+  return model;
+}
+
 namespace {
 
 BodyInfo singleBody(const std::string& name, const Model& model) {
@@ -23,10 +97,6 @@ BodyInfo singleBody(const std::string& name, const Model& model) {
   return info;
 }
 
-std::vector<Vec3> wings(double angle) {
-  const double a = angle / 2;
-  return {{0, 0, 0}, {1, 0, 0}, {0.4, std::cos(a), -std::sin(a)}, {0.6, -std::cos(a), -std::sin(a)}};
-}
 
 // A ball (icosphere, 42 vertices, radius 1, mass 1) with the given parameters.
 BodyDesc ball(double strutPeriod, double strutDecay, double hingePeriod, double hingeDecay) {
@@ -59,16 +129,9 @@ StabilityCase fromBody(const std::string& name, const std::string& description, 
 StabilityCase strutCase(double period, double decay) {
   StabilityCase c;
   c.name = "strut";
-  Model& m = c.model;
-  m.gravity = {};
-  m.mass = {1, 1};
-  m.invMass = {1, 1};
-  m.restPosition = {{0, 0, 0}, {1, 0, 0}};
-  m.initialVelocity = {{}, {}};
-  m.body = {0, 0};
-  const double mean = 1.0;
-  m.struts = {{0, 1, 1.0, stiffnessFromPeriod(mean, period), decay > 0 ? dampingFromDecay(mean, decay) : 0.0}};
-  m.bodies = {singleBody("strut", m)};
+  c.model = strutModel(1.0, 1.0, 1.0, stiffnessFromPeriod(1.0, period), decay > 0 ? dampingFromDecay(1.0, decay) : 0.0,
+                       false);
+  c.model.bodies = {singleBody("strut", c.model)};
   c.positions = {{0, 0, 0}, {1.1, 0, 0}};
   return c;
 }
@@ -76,29 +139,19 @@ StabilityCase strutCase(double period, double decay) {
 StabilityCase hingeCase(double period, double decay, double restAngle, double startAngle) {
   StabilityCase c;
   c.name = "hinge";
-  Model& m = c.model;
-  m.gravity = {};
-  m.mass = {1, 1, 1, 1};
-  m.invMass = {1, 1, 1, 1};
-  m.restPosition = wings(restAngle);
-  m.initialVelocity = std::vector<Vec3>(4);
-  m.body = {0, 0, 0, 0};
-  m.faces = {{0, 1, 2}, {1, 0, 3}};
+  const std::vector<Vec3> x = hingePositions(restAngle);
   HingeGeometry g;
-  hingeGeometry(m.restPosition[0], m.restPosition[1], m.restPosition[2], m.restPosition[3], g);
+  hingeGeometry(x[0], x[1], x[2], x[3], g);
   const double r = 0.5 * (g.leverLeft + g.leverRight);
-  Hinge h{{0, 1, 2, 3}, g.theta, torsionStiffnessFromPeriod(1.0, r, period),
-          decay > 0 ? torsionDampingFromDecay(1.0, r, decay) : 0.0, {0.2 * g.leverLeft, 0.2 * g.leverRight}};
-  m.hinges = {h};
   // Struts of twice the hinge's period hold the triangles' shape (softer struts would let the
   // hinge crush its own faces).
-  for (auto [i, j] : {std::pair<uint32_t, uint32_t>{0, 1}, {0, 2}, {1, 2}, {0, 3}, {1, 3}}) {
-    const auto& p = m.restPosition;
-    m.struts.push_back({i, j, length(p[j] - p[i]), stiffnessFromPeriod(1.0, 2 * period),
-                        decay > 0 ? dampingFromDecay(1.0, decay) : 0.0});
-  }
-  m.bodies = {singleBody("hinge", m)};
-  c.positions = wings(startAngle);
+  c.model = hingeModel(g.theta, torsionStiffnessFromPeriod(1.0, r, period),
+                       decay > 0 ? torsionDampingFromDecay(1.0, r, decay) : 0.0, true,
+                       stiffnessFromPeriod(1.0, 2 * period), decay > 0 ? dampingFromDecay(1.0, decay) : 0.0);
+  c.model.hinges[0].minLever[0] = 0.2 * g.leverLeft;
+  c.model.hinges[0].minLever[1] = 0.2 * g.leverRight;
+  c.model.bodies = {singleBody("hinge", c.model)};
+  c.positions = hingePositions(startAngle);
   return c;
 }
 

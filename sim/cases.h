@@ -4,12 +4,26 @@
 #pragma once
 
 #include <functional>
+#include <utility>
 #include <string>
 #include <vector>
 
 #include "sim/model.h"
 
 namespace springy {
+
+// Hand-built models the tests, the studies and the benchmarks share: no mesh, no scene.
+// One free vertex of the given mass, no colliders.
+Model vertexModel(const Vec3& position, const Vec3& velocity, const Vec3& gravity, double mass = 1.0);
+// Two vertices joined by one strut along x, no gravity, no colliders.
+Model strutModel(double m0, double m1, double restLength, double k, double d, bool pinFirst);
+// Two triangles (0, 1, 2) and (1, 0, 3) sharing the edge 0-1 along x, folded to `angle` (the
+// signed dihedral angle; left wing in the y > 0 half-plane tilted down by angle / 2, right wing
+// mirrored: positive = convex, normals along +z when flat).
+std::vector<Vec3> hingePositions(double angle);
+// Those triangles with unit masses, one hinge (rest angle, k_theta, d_theta) and optionally the
+// five struts of their edges (k, d).
+Model hingeModel(double restAngle, double k, double d, bool withStruts, double strutK = 0.0, double strutD = 0.0);
 
 // The stiff and extreme cases of the stability study (`springy study stability`) and its tests.
 struct StabilityCase {

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "render/image.hpp"
+#include "render/image.h"
 #include "run_springy.h"
 #include "sim/vec3.h"
 

@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-#include "render/image.hpp"
+#include "render/image.h"
 
 namespace {
 

@@ -1,6 +1,7 @@
 #include "sim/force_stages.h"
 
 #include <algorithm>
+#include <type_traits>
 
 #include "sim/strut.h"
 
@@ -196,55 +197,50 @@ void Forces::evaluate(const Vec3* x, const Vec3* v, double t, Vec3* f) const {
     pool_->run([&](unsigned thread) { ownedForces(thread, x, v, air, f, false); });
     return;
   }
-  const std::size_t n = model_->vertexCount();
-  if (!startsWithGravity()) std::fill(f, f + n, Vec3{});
-  for (ForceStage stage : stages_) {
-    switch (stage) {
-      case ForceStage::Gravity: setGravity(*model_, 0, n, f); break;
-      case ForceStage::Drag: applyDrag(*model_, 0, n, air, v, f); break;
-      case ForceStage::Wind: applyWindPressure(*model_, 0, model_->faces.size(), air, x, v, f); break;
-      case ForceStage::Struts: applyStruts(model_->struts.data(), 0, model_->struts.size(), x, v, f); break;
-      case ForceStage::Hinges:
-        applyHinges(model_->hinges.data(), hingeTerms_.data(), 0, model_->hinges.size(), x, v, f);
-        break;
-      case ForceStage::Gas:
-        applyGasPressure(*model_, overpressure_.data(), facesAround_, areaVectors_.data(), 0, n, f);
-        break;
-      case ForceStage::Deformation: applyDeformationDamping(*model_, rigid_.data(), 0, n, x, v, f); break;
-    }
-  }
+  runStages(Everything{0, model_->vertexCount()}, x, v, air, f);
 }
 
-
 void Forces::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
-                        bool toAcceleration) const {
-  // The same stages in the same order as the one-threaded loop, restricted to this thread's
-  // vertices: each vertex receives the same terms in the same order.
+                         bool toAcceleration) const {
   const Share& share = shares_[thread];
   prefetchForeign(thread, x, v);
-  if (!startsWithGravity()) std::fill(f + share.begin, f + share.end, Vec3{});
-  for (ForceStage stage : stages_) {
-    switch (stage) {
-      case ForceStage::Gravity: setGravity(*model_, share.begin, share.end, f); break;
-      case ForceStage::Drag: applyDrag(*model_, share.begin, share.end, air, v, f); break;
-      case ForceStage::Wind: applyWindPressureOwned(*model_, share.faces.data(), share.faces.size(), air, x, v, f); break;
-      case ForceStage::Struts: applyStrutsOwned(model_->struts.data(), share.struts.data(), share.struts.size(), x, v, f); break;
-      case ForceStage::Hinges:
-        applyHingesOwned(model_->hinges.data(), hingeTerms_.data(), share.hinges.data(), share.hinges.size(), x, v, f);
-        break;
-      case ForceStage::Gas:
-        applyGasPressure(*model_, overpressure_.data(), facesAround_, areaVectors_.data(), share.begin, share.end, f);
-        break;
-      case ForceStage::Deformation:
-        applyDeformationDamping(*model_, rigid_.data(), share.begin, share.end, x, v, f);
-        break;
-    }
-  }
+  runStages(share, x, v, air, f);
   if (toAcceleration) {
     for (std::size_t i = share.begin; i < share.end; ++i) f[i] = f[i] * model_->invMass[i];  // pinned: invMass 0
   }
 }
 
+template <class Scope>
+void Forces::runStages(const Scope& scope, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f) const {
+  // One thread: every vertex and element. A thread's share: its own vertices, from the elements
+  // that touch them, in the same stages and order, so each vertex receives the same terms in the
+  // same order on every thread count.
+  constexpr bool all = std::is_same_v<Scope, Everything>;
+  const Model& m = *model_;
+  if (!startsWithGravity()) std::fill(f + scope.begin, f + scope.end, Vec3{});
+  for (ForceStage stage : stages_) {
+    switch (stage) {
+      case ForceStage::Gravity: setGravity(m, scope.begin, scope.end, f); break;
+      case ForceStage::Drag: applyDrag(m, scope.begin, scope.end, air, v, f); break;
+      case ForceStage::Wind:
+        if constexpr (all) applyWindPressure(m, 0, m.faces.size(), air, x, v, f);
+        else applyWindPressureOwned(m, scope.faces.data(), scope.faces.size(), air, x, v, f);
+        break;
+      case ForceStage::Struts:
+        if constexpr (all) applyStruts(m.struts.data(), 0, m.struts.size(), x, v, f);
+        else applyStrutsOwned(m.struts.data(), scope.struts.data(), scope.struts.size(), x, v, f);
+        break;
+      case ForceStage::Hinges:
+        if constexpr (all) applyHinges(m.hinges.data(), hingeTerms_.data(), 0, m.hinges.size(), x, v, f);
+        else applyHingesOwned(m.hinges.data(), hingeTerms_.data(), scope.hinges.data(), scope.hinges.size(), x, v, f);
+        break;
+      case ForceStage::Gas:
+        applyGasPressure(m, overpressure_.data(), facesAround_, areaVectors_.data(), scope.begin, scope.end, f);
+        break;
+      case ForceStage::Deformation: applyDeformationDamping(m, rigid_.data(), scope.begin, scope.end, x, v, f); break;
+    }
+  }
+}
 
 void Forces::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
   if (pool_) {

@@ -5,8 +5,9 @@
 // scene uses (no wind stage without wind, no hinge stage for the legacy all-pairs model):
 //   [gravity] [drag] [wind] [struts] [hinges] [gas] [deformation damping]
 // Adding a force kind: its kernel in its own file (as sim/strut.h, sim/hinge.h, sim/forces.h),
-// a ForceStage value with its name, and one case in each of the two stage loops below
-// (evaluate's, for one thread, and ownedForces', a thread's own vertices).
+// a ForceStage value with its name, its place in the constructor's list, and its case in the one
+// stage loop (runStages; a kernel over elements has an entry for all of them and one for a
+// thread's list of them).
 //
 // Threads (setThreads): the evaluation is split by vertex ownership (each thread computes the
 // forces on its own contiguous range of vertices from the elements that touch them), and the
@@ -62,6 +63,13 @@ class Forces {
   // optionally divided by the masses, written to f. Threads write disjoint ranges.
   void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
                    bool toAcceleration) const;
+  // The stage loop, the one switch over the stages: Scope is Everything (one thread) or a
+  // thread's Share (its vertices and the elements that touch them).
+  struct Everything {
+    std::size_t begin, end;
+  };
+  template <class Scope>
+  void runStages(const Scope& scope, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f) const;
   // The per-body sums the stages need before the forces: each gas body's volume and
   // overpressure (chunks of faces summed by the threads, then the chunks' sums in order), and
   // each damped body's rigid motion (chunks of vertices likewise).

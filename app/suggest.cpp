@@ -131,9 +131,14 @@ void printSquash(const SceneDesc& scene, const Model& model, double keepVolume) 
       std::printf("    body '%s': the simulation blew up; make the step smaller first\n", info.name.c_str());
       return;
     }
+    if (!(info.restVolume > 0.0)) {
+      std::printf("    body '%s': encloses no volume; flattened by up to %.0f%%\n", info.name.c_str(),
+                  100 * s.flattening);
+      continue;
+    }
     std::printf("    body '%s': lowest volume %.0f%% of rest, flattened by up to %.0f%%", info.name.c_str(),
                 100 * s.lowestVolume, 100 * s.flattening);
-    if (!(info.restVolume > 0.0) || s.lowestVolume >= keepVolume) {
+    if (s.lowestVolume >= keepVolume) {
       std::printf(": holds its shape\n");
       continue;
     }

@@ -100,7 +100,7 @@ void BM_StrutKernel(benchmark::State& state) {
   std::vector<Vec3> x, v, f(model.vertexCount());
   perturbedState(model, x, v);
   for (auto _ : state) {
-    applyStruts(model.struts.data(), 0, model.struts.size(), x.data(), v.data(), f.data());
+    applyStruts(model.struts.data(), Elements::range(0, model.struts.size()), x.data(), v.data(), f.data());
     benchmark::DoNotOptimize(f.data());
     benchmark::ClobberMemory();
   }
@@ -119,7 +119,7 @@ void hingeKernel(benchmark::State& state, bool oneAtATime) {
   const std::size_t n = model.hinges.size(), chunk = oneAtATime ? 1 : n;
   for (auto _ : state) {
     for (std::size_t k = 0; k < n; k += chunk) {
-      applyHinges(model.hinges.data(), terms.data(), k, k + chunk, x.data(), v.data(), f.data());
+      applyHinges(model.hinges.data(), terms.data(), Elements::range(k, k + chunk), x.data(), v.data(), f.data());
     }
     benchmark::DoNotOptimize(f.data());
     benchmark::ClobberMemory();
@@ -267,8 +267,9 @@ void BM_UnusedStages_HandWritten(benchmark::State& state) {
   for (auto _ : state) {
     xOld = x;
     for (std::size_t i = 0; i < n; ++i) f[i] = model.gravity * model.mass[i];
-    applyStruts(model.struts.data(), 0, model.struts.size(), x.data(), v.data(), f.data());
-    applyHinges(model.hinges.data(), terms.data(), 0, model.hinges.size(), x.data(), v.data(), f.data());
+    applyStruts(model.struts.data(), Elements::range(0, model.struts.size()), x.data(), v.data(), f.data());
+    applyHinges(model.hinges.data(), terms.data(), Elements::range(0, model.hinges.size()), x.data(), v.data(),
+                f.data());
     for (std::size_t i = 0; i < n; ++i) {
       v[i] += f[i] * (model.invMass[i] * dt);
       x[i] += v[i] * dt;

@@ -48,6 +48,14 @@ Model strutModel(double m0, double m1, double restLength, double k, double d, bo
 
 // Two triangles (0, 1, 2) and (1, 0, 3) sharing the edge 0-1 along x, folded to `angle`
 // (the signed dihedral angle), unit masses, one hinge, optionally the five struts.
+void applyHingesDerivingTerms(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v,
+                              Vec3* f) {
+  for (std::size_t k = begin; k < end; ++k) {
+    const HingeTerms terms = hingeTerms(hinges[k]);
+    applyHinges(hinges + k, &terms, Elements::range(0, 1), x, v, f);
+  }
+}
+
 std::vector<Vec3> hingePositions(double angle) {
   // Left wing in the y > 0 half-plane tilted down by angle/2, right wing mirrored: the
   // dihedral angle of this pair is `angle` (positive = convex, normals along +z when flat).

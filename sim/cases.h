@@ -24,6 +24,11 @@ std::vector<Vec3> hingePositions(double angle);
 // Those triangles with unit masses, one hinge (rest angle, k_theta, d_theta) and optionally the
 // five struts of their edges (k, d).
 Model hingeModel(double restAngle, double k, double d, bool withStruts, double strutK = 0.0, double strutD = 0.0);
+// The forces of hinges [begin, end) added to f, each hinge's kernel constants (HingeTerms)
+// derived on the spot: for a few hinges in a test, where the stage list's cached terms are not at
+// hand.
+void applyHingesDerivingTerms(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v,
+                              Vec3* f);
 
 // The stiff and extreme cases of the stability study (`springy study stability`) and its tests.
 struct StabilityCase {

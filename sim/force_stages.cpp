@@ -1,62 +1,103 @@
 #include "sim/force_stages.h"
 
 #include <algorithm>
+#include <iterator>
 #include <type_traits>
 
 #include "sim/strut.h"
 
 namespace springy {
+namespace {
 
-std::string_view forceStageName(ForceStage stage) {
-  switch (stage) {
-    case ForceStage::Gravity: return "gravity";
-    case ForceStage::Drag: return "drag";
-    case ForceStage::Wind: return "wind";
-    case ForceStage::Struts: return "struts";
-    case ForceStage::Hinges: return "hinges";
-    case ForceStage::Gas: return "gas";
-    case ForceStage::Deformation: return "deformation damping";
+// One evaluation of one stage over one scope: the state, the vertices it writes and the
+// elements it walks (all of them on one thread, a thread's lists otherwise).
+struct StageCall {
+  const Model& model;
+  const StageData& data;
+  const Vec3* x;
+  const Vec3* v;
+  Vec3 air;  // the wind's air velocity at this time (0 without wind)
+  Vec3* f;
+  std::size_t begin, end;  // the vertices written
+  Elements struts, hinges, faces;
+};
+
+struct StageKind {
+  ForceStage stage;
+  std::string_view name;
+  bool (*used)(const Model&, const StageData&);  // whether a model needs this stage
+  void (*run)(const StageCall&);                 // adds (gravity: sets) its forces on [begin, end)
+};
+
+// The registry: one line per force kind, in evaluation order (ForceStage's order).
+constexpr StageKind kStageKinds[] = {
+    {ForceStage::Gravity, "gravity", [](const Model& m, const StageData&) { return m.gravity != Vec3{}; },
+     [](const StageCall& c) { setGravity(c.model, c.begin, c.end, c.f); }},
+    {ForceStage::Drag, "drag", [](const Model& m, const StageData&) { return m.drag > 0.0; },
+     [](const StageCall& c) { applyDrag(c.model, c.begin, c.end, c.air, c.v, c.f); }},
+    {ForceStage::Wind, "wind", [](const Model& m, const StageData&) { return m.wind && m.wind->pressure > 0.0; },
+     [](const StageCall& c) { applyWindPressure(c.model, c.faces, c.air, c.x, c.v, c.f); }},
+    {ForceStage::Struts, "struts", [](const Model& m, const StageData&) { return !m.struts.empty(); },
+     [](const StageCall& c) { applyStruts(c.model.struts.data(), c.struts, c.x, c.v, c.f); }},
+    {ForceStage::Hinges, "hinges", [](const Model& m, const StageData&) { return !m.hinges.empty(); },
+     [](const StageCall& c) { applyHinges(c.model.hinges.data(), c.data.hingeTerms.data(), c.hinges, c.x, c.v, c.f); }},
+    {ForceStage::Gas, "gas", [](const Model&, const StageData& d) { return !d.gasBodies.empty(); },
+     [](const StageCall& c) {
+       applyGasPressure(c.model, c.data.overpressure.data(), c.data.facesAround, c.data.areaVectors.data(), c.begin,
+                        c.end, c.f);
+     }},
+    {ForceStage::Deformation, "deformation damping", [](const Model&, const StageData& d) { return d.damped; },
+     [](const StageCall& c) { applyDeformationDamping(c.model, c.data.rigid.data(), c.begin, c.end, c.x, c.v, c.f); }},
+};
+
+constexpr bool registryInStageOrder() {
+  for (std::size_t k = 0; k < std::size(kStageKinds); ++k) {
+    if (static_cast<std::size_t>(kStageKinds[k].stage) != k) return false;
   }
-  return "?";
+  return true;
 }
+static_assert(registryInStageOrder(), "kStageKinds[k] is the stage of ForceStage value k");
+
+}  // namespace
+
+std::string_view forceStageName(ForceStage stage) { return kStageKinds[static_cast<std::size_t>(stage)].name; }
 
 Forces::Forces(const Model& model) : model_(&model) {
-  // Assemble the force stages this scene uses, in a fixed order.
-  if (model_->gravity != Vec3{}) stages_.push_back(ForceStage::Gravity);
-  if (model_->drag > 0.0) stages_.push_back(ForceStage::Drag);
-  if (model_->wind && model_->wind->pressure > 0.0) stages_.push_back(ForceStage::Wind);
-  if (!model_->struts.empty()) stages_.push_back(ForceStage::Struts);
-  if (!model_->hinges.empty()) stages_.push_back(ForceStage::Hinges);
+  // The stages' data: the hinges' constants, the gas bodies' face chunks, the damped bodies'
+  // vertex chunks.
+  data_.hingeTerms.reserve(model_->hinges.size());
+  for (const Hinge& h : model_->hinges) data_.hingeTerms.push_back(hingeTerms(h));
   for (uint32_t b = 0; b < model_->bodies.size(); ++b) {
     const BodyInfo& info = model_->bodies[b];
     if (!(info.gasPressure > 0.0)) continue;
-    gasBodies_.push_back(b);
+    data_.gasBodies.push_back(b);
     const uint32_t end = info.firstFace + info.faceCount;
     for (uint32_t f = info.firstFace; f < end; f += kVolumeChunk) {
       volumeChunks_.push_back({b, f, std::min(f + kVolumeChunk, end)});
     }
   }
   chunkSum_.assign(volumeChunks_.size(), 0.0);
-  if (!gasBodies_.empty()) {
-    stages_.push_back(ForceStage::Gas);
-    overpressure_.assign(model_->bodies.size(), 0.0);
-    areaVectors_.assign(model_->faces.size(), Vec3{});
-    facesAround_ = vertexFaces(*model_);
+  if (!data_.gasBodies.empty()) {
+    data_.overpressure.assign(model_->bodies.size(), 0.0);
+    data_.areaVectors.assign(model_->faces.size(), Vec3{});
+    data_.facesAround = vertexFaces(*model_);
   }
-  rigid_.assign(model_->bodies.size(), RigidMotion{});
+  data_.rigid.assign(model_->bodies.size(), RigidMotion{});
   for (uint32_t b = 0; b < model_->bodies.size(); ++b) {
     const BodyInfo& info = model_->bodies[b];
     if (!(info.deformationDamping > 0.0)) continue;
-    rigid_[b].rate = info.deformationDamping;
+    data_.rigid[b].rate = info.deformationDamping;
     const uint32_t end = info.firstVertex + info.vertexCount;
     for (uint32_t i = info.firstVertex; i < end; i += kVolumeChunk) {
       rigidChunks_.push_back({b, i, std::min(i + kVolumeChunk, end)});
     }
   }
   chunkMoments_.assign(rigidChunks_.size(), MassMoments{});
-  if (!rigidChunks_.empty()) stages_.push_back(ForceStage::Deformation);
-  hingeTerms_.reserve(model_->hinges.size());
-  for (const Hinge& h : model_->hinges) hingeTerms_.push_back(hingeTerms(h));
+  data_.damped = !rigidChunks_.empty();
+  // The stages this model uses, in the registry's order.
+  for (const StageKind& kind : kStageKinds) {
+    if (kind.used(*model_, data_)) stages_.push_back(kind.stage);
+  }
 }
 
 
@@ -92,7 +133,7 @@ void Forces::setThreads(unsigned requested, std::size_t minVerticesPerThread) {
   distribute([&](std::size_t e, int c) { return c == 0 ? model_->struts[e].i : model_->struts[e].j; },
              model_->struts.size(), 2, &Share::struts);
   distribute([&](std::size_t e, int c) { return model_->hinges[e].v[c]; }, model_->hinges.size(), 4, &Share::hinges);
-  if (model_->wind || !gasBodies_.empty()) {
+  if (model_->wind || !data_.gasBodies.empty()) {
     distribute([&](std::size_t e, int c) { return model_->faces[e][static_cast<std::size_t>(c)]; }, model_->faces.size(),
                3, &Share::faces);
   }
@@ -137,12 +178,12 @@ double Forces::redundancy() const {
 
 
 void Forces::updateGas(const Vec3* x) const {
-  if (gasBodies_.empty()) return;
+  if (data_.gasBodies.empty()) return;
   const auto sumChunks = [&](std::size_t begin, std::size_t end) {
     for (std::size_t c = begin; c < end; ++c) {
       const VolumeChunk& chunk = volumeChunks_[c];
       chunkSum_[c] = sixVolume(*model_, chunk.begin, chunk.end, x[model_->bodies[chunk.body].firstVertex], x,
-                               areaVectors_.data());
+                               data_.areaVectors.data());
     }
   };
   if (pool_ && volumeChunks_.size() > 1) {
@@ -155,10 +196,10 @@ void Forces::updateGas(const Vec3* x) const {
     sumChunks(0, volumeChunks_.size());
   }
   std::size_t c = 0;
-  for (uint32_t b : gasBodies_) {
+  for (uint32_t b : data_.gasBodies) {
     double sum = 0.0;
     for (; c < volumeChunks_.size() && volumeChunks_[c].body == b; ++c) sum += chunkSum_[c];
-    overpressure_[b] = gasOverpressure(model_->bodies[b], sum / 6.0);
+    data_.overpressure[b] = gasOverpressure(model_->bodies[b], sum / 6.0);
   }
 }
 
@@ -183,9 +224,9 @@ void Forces::updateRigid(const Vec3* x, const Vec3* v) const {
     const uint32_t b = rigidChunks_[c].body;
     MassMoments sum;
     for (; c < rigidChunks_.size() && rigidChunks_[c].body == b; ++c) sum.add(chunkMoments_[c]);
-    const double rate = rigid_[b].rate;
-    rigid_[b] = rigidMotion(sum, x[model_->bodies[b].firstVertex]);
-    rigid_[b].rate = rate;
+    const double rate = data_.rigid[b].rate;
+    data_.rigid[b] = rigidMotion(sum, x[model_->bodies[b].firstVertex]);
+    data_.rigid[b].rate = rate;
   }
 }
 
@@ -215,31 +256,27 @@ void Forces::runStages(const Scope& scope, const Vec3* x, const Vec3* v, const V
   // One thread: every vertex and element. A thread's share: its own vertices, from the elements
   // that touch them, in the same stages and order, so each vertex receives the same terms in the
   // same order on every thread count.
-  constexpr bool all = std::is_same_v<Scope, Everything>;
   const Model& m = *model_;
-  if (!startsWithGravity()) std::fill(f + scope.begin, f + scope.end, Vec3{});
-  for (ForceStage stage : stages_) {
-    switch (stage) {
-      case ForceStage::Gravity: setGravity(m, scope.begin, scope.end, f); break;
-      case ForceStage::Drag: applyDrag(m, scope.begin, scope.end, air, v, f); break;
-      case ForceStage::Wind:
-        if constexpr (all) applyWindPressure(m, 0, m.faces.size(), air, x, v, f);
-        else applyWindPressureOwned(m, scope.faces.data(), scope.faces.size(), air, x, v, f);
-        break;
-      case ForceStage::Struts:
-        if constexpr (all) applyStruts(m.struts.data(), 0, m.struts.size(), x, v, f);
-        else applyStrutsOwned(m.struts.data(), scope.struts.data(), scope.struts.size(), x, v, f);
-        break;
-      case ForceStage::Hinges:
-        if constexpr (all) applyHinges(m.hinges.data(), hingeTerms_.data(), 0, m.hinges.size(), x, v, f);
-        else applyHingesOwned(m.hinges.data(), hingeTerms_.data(), scope.hinges.data(), scope.hinges.size(), x, v, f);
-        break;
-      case ForceStage::Gas:
-        applyGasPressure(m, overpressure_.data(), facesAround_, areaVectors_.data(), scope.begin, scope.end, f);
-        break;
-      case ForceStage::Deformation: applyDeformationDamping(m, rigid_.data(), scope.begin, scope.end, x, v, f); break;
+  const auto elementsOf = [&](std::vector<ElementRef> Share::*list, std::size_t all) {
+    if constexpr (std::is_same_v<Scope, Everything>) {
+      return Elements::range(0, all);
+    } else {
+      return Elements::owned(scope.*list);
     }
-  }
+  };
+  const StageCall call{m,
+                       data_,
+                       x,
+                       v,
+                       air,
+                       f,
+                       scope.begin,
+                       scope.end,
+                       elementsOf(&Share::struts, m.struts.size()),
+                       elementsOf(&Share::hinges, m.hinges.size()),
+                       elementsOf(&Share::faces, m.faces.size())};
+  if (!startsWithGravity()) std::fill(f + scope.begin, f + scope.end, Vec3{});
+  for (ForceStage stage : stages_) kStageKinds[static_cast<std::size_t>(stage)].run(call);
 }
 
 void Forces::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {

@@ -5,9 +5,10 @@
 // scene uses (no wind stage without wind, no hinge stage for the legacy all-pairs model):
 //   [gravity] [drag] [wind] [struts] [hinges] [gas] [deformation damping]
 // Adding a force kind: its kernel in its own file (as sim/strut.h, sim/hinge.h, sim/forces.h),
-// a ForceStage value with its name, its place in the constructor's list, and its case in the one
-// stage loop (runStages; a kernel over elements has an entry for all of them and one for a
-// thread's list of them).
+// a ForceStage value, and one line in the registry (kStageKinds in force_stages.cpp: its name,
+// when a model uses it, and the call of its kernel). A kernel has one entry point: over vertices
+// it takes a range, over elements an Elements selection (all of them, or a thread's list;
+// sim/parallel.h).
 //
 // Threads (setThreads): the evaluation is split by vertex ownership (each thread computes the
 // forces on its own contiguous range of vertices from the elements that touch them), and the
@@ -27,8 +28,21 @@
 
 namespace springy {
 
+// In evaluation order (the registry's order).
 enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges, Gas, Deformation };
 std::string_view forceStageName(ForceStage stage);
+
+// What the stages read besides the model and the state, derived once from the model (the
+// constant parts) and per evaluation (the per-body sums): the stage kernels' inputs.
+struct StageData {
+  std::vector<HingeTerms> hingeTerms;  // per hinge: the force kernel's constants
+  std::vector<uint32_t> gasBodies;     // bodies that hold gas
+  VertexFaces facesAround;             // the gas stage's faces per vertex
+  std::vector<double> overpressure;    // per body, for the evaluation under way [Pa]
+  std::vector<Vec3> areaVectors;       // per face of a gas body: N of sixVolume, same evaluation
+  std::vector<RigidMotion> rigid;      // per body (rate 0: not damped), same evaluation
+  bool damped = false;                 // a body has deformation damping
+};
 
 class Forces {
  public:
@@ -63,8 +77,8 @@ class Forces {
   // optionally divided by the masses, written to f. Threads write disjoint ranges.
   void ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Vec3& air, Vec3* f,
                    bool toAcceleration) const;
-  // The stage loop, the one switch over the stages: Scope is Everything (one thread) or a
-  // thread's Share (its vertices and the elements that touch them).
+  // The stage loop over the registry: Scope is Everything (one thread) or a thread's Share (its
+  // vertices and the elements that touch them).
   struct Everything {
     std::size_t begin, end;
   };
@@ -93,22 +107,17 @@ class Forces {
 
   const Model* model_;
   std::vector<ForceStage> stages_;
-  std::vector<HingeTerms> hingeTerms_;         // per-hinge constants of the force kernel
-  std::vector<uint32_t> gasBodies_;            // bodies that hold gas
+  mutable StageData data_;  // the per-evaluation parts change in prepare()
   struct VolumeChunk {
     uint32_t body, begin, end;  // faces [begin, end) of a gas body
   };
   std::vector<VolumeChunk> volumeChunks_;      // in body and face order
   mutable std::vector<double> chunkSum_;       // per chunk: six times its volume
-  mutable std::vector<double> overpressure_;   // per body, for the evaluation under way [Pa]
-  mutable std::vector<Vec3> areaVectors_;      // per face of a gas body: N of sixVolume, same evaluation
-  VertexFaces facesAround_;                    // the gas stage's faces per vertex
   struct VertexChunk {
     uint32_t body, begin, end;  // vertices [begin, end) of a body with deformation damping
   };
   std::vector<VertexChunk> rigidChunks_;        // in body and vertex order
   mutable std::vector<MassMoments> chunkMoments_;  // per chunk, for the evaluation under way
-  mutable std::vector<RigidMotion> rigid_;      // per body (rate 0: not damped)
   std::unique_ptr<ThreadPool> pool_;           // null: one thread
   std::vector<Share> shares_;                  // one per thread when pool_ is set
 };

@@ -30,28 +30,19 @@ void applyDrag(const Model& model, std::size_t begin, std::size_t end, const Vec
   for (std::size_t i = begin; i < end; ++i) f[i] -= (v[i] - air) * (model.drag * model.mass[i]);
 }
 
-void applyWindPressure(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* x,
-                       const Vec3* v, Vec3* f) {
+void applyWindPressure(const Model& model, Elements faces, const Vec3& air, const Vec3* x, const Vec3* v, Vec3* f) {
   const double c = model.wind->pressure;
-  Vec3 force;
-  for (std::size_t k = begin; k < end; ++k) {
-    const Triangle& t = model.faces[k];
-    if (!windForce(t, c, air, x, v, force)) continue;
-    for (uint32_t i : t) f[i] += force;
-  }
-}
-
-void applyWindPressureOwned(const Model& model, const ElementRef* list, std::size_t count, const Vec3& air,
-                       const Vec3* x, const Vec3* v, Vec3* f) {
-  const double c = model.wind->pressure;
-  Vec3 force;
-  for (std::size_t r = 0; r < count; ++r) {
-    const Triangle& t = model.faces[list[r].index];
-    if (!windForce(t, c, air, x, v, force)) continue;
-    for (int i = 0; i < 3; ++i) {
-      if (list[r].mask & (1u << i)) f[t[i]] += force;
+  faces.visit([&](std::size_t count, auto indexOf, auto maskOf) {
+    Vec3 force;
+    for (std::size_t r = 0; r < count; ++r) {
+      const Triangle& t = model.faces[indexOf(r)];
+      if (!windForce(t, c, air, x, v, force)) continue;
+      const uint32_t mask = maskOf(r);
+      for (int i = 0; i < 3; ++i) {
+        if (mask & (1u << i)) f[t[i]] += force;
+      }
     }
-  }
+  });
 }
 
 namespace {

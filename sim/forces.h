@@ -20,13 +20,10 @@ void setGravity(const Model& model, std::size_t begin, std::size_t end, Vec3* f)
 // (docs/model.md §6, eq. A9).
 void applyDrag(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* v, Vec3* f);
 
-// Wind pressure on faces [begin, end): a face turned into the relative wind (w - v_face) . n < 0
-// is pushed along -n with force c A ((w - v_face) . n) n, split equally over its corners.
-void applyWindPressure(const Model& model, std::size_t begin, std::size_t end, const Vec3& air, const Vec3* x,
-                       const Vec3* v, Vec3* f);
-// The same for the listed faces, adding only to the corners whose bit is set in the mask.
-void applyWindPressureOwned(const Model& model, const ElementRef* list, std::size_t count, const Vec3& air,
-                       const Vec3* x, const Vec3* v, Vec3* f);
+// Wind pressure on the selected faces (all of a range, or a thread's list adding only to the
+// corners its masks name): a face turned into the relative wind (w - v_face) . n < 0 is pushed
+// along -n with force c A ((w - v_face) . n) n, split equally over its corners.
+void applyWindPressure(const Model& model, Elements faces, const Vec3& air, const Vec3* x, const Vec3* v, Vec3* f);
 
 // Enclosed gas (docs/model.md §11, eq. A12-A16; Matyka & Ollila 2004, "Pressure model of soft
 // body simulation"):

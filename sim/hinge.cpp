@@ -267,25 +267,11 @@ void applyHingeList(const Hinge* hinges, const HingeTerms* terms, std::size_t co
 
 }  // namespace
 
-void applyHinges(const Hinge* hinges, const HingeTerms* terms, std::size_t begin, std::size_t end, const Vec3* x,
-                 const Vec3* v, Vec3* f) {
-  applyHingeList(
-      hinges, terms, end - begin, [begin](std::size_t r) { return begin + r; }, [](std::size_t) { return 0xFu; }, x, v,
-      f);
-}
-
-void applyHingesOwned(const Hinge* hinges, const HingeTerms* terms, const ElementRef* list, std::size_t count,
-                      const Vec3* x, const Vec3* v, Vec3* f) {
-  applyHingeList(
-      hinges, terms, count, [list](std::size_t r) { return list[r].index; },
-      [list](std::size_t r) { return list[r].mask; }, x, v, f);
-}
-
-void applyHinges(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f) {
-  for (std::size_t k = begin; k < end; ++k) {
-    const HingeTerms terms = hingeTerms(hinges[k]);
-    applyHinges(hinges + k, &terms, std::size_t{0}, std::size_t{1}, x, v, f);
-  }
+void applyHinges(const Hinge* hinges, const HingeTerms* terms, Elements elements, const Vec3* x, const Vec3* v,
+                 Vec3* f) {
+  elements.visit([&](std::size_t count, auto indexOf, auto maskOf) {
+    applyHingeList(hinges, terms, count, indexOf, maskOf, x, v, f);
+  });
 }
 
 double hingeEnergy(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x) {

@@ -65,16 +65,12 @@ struct HingeTerms {
 };
 HingeTerms hingeTerms(const Hinge& hinge);
 
-// Accumulates the forces of hinges [begin, end) into f. Degenerate hinges are skipped for the
-// instant (the stated guard; they are rejected at load when degenerate at rest).
-void applyHinges(const Hinge* hinges, const HingeTerms* terms, std::size_t begin, std::size_t end, const Vec3* x,
-                 const Vec3* v, Vec3* f);
-// The same for the listed hinges, adding only to the vertices whose bit is set in the
-// reference's mask (a thread's share, sim/parallel.h).
-void applyHingesOwned(const Hinge* hinges, const HingeTerms* terms, const ElementRef* list, std::size_t count,
-                 const Vec3* x, const Vec3* v, Vec3* f);
-// Convenience for a few hinges without cached terms (tests, tools): derives them on the fly.
-void applyHinges(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f);
+// Accumulates the forces of the selected hinges into f (all of a range, or a thread's list adding
+// only to the vertices its masks name; sim/parallel.h); terms[k] belongs to hinges[k]. Degenerate
+// hinges are skipped for the instant (the stated guard; they are rejected at load when
+// degenerate at rest).
+void applyHinges(const Hinge* hinges, const HingeTerms* terms, Elements elements, const Vec3* x, const Vec3* v,
+                 Vec3* f);
 
 // Elastic energy 1/2 k (theta - theta0)^2 summed over hinges [begin, end).
 double hingeEnergy(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x);

@@ -35,6 +35,49 @@ struct ElementRef {
   uint32_t mask;
 };
 
+// The elements a force kernel evaluates, its one argument for "which": either all of a range
+// [begin, end), adding to every vertex of each (one thread), or a thread's list of references,
+// adding only to the vertices each reference's mask names. A kernel walks them with indexOf(r)
+// and maskOf(r) for r in [0, count()) (Elements::visit), so one loop serves both.
+class Elements {
+ public:
+  static Elements range(std::size_t begin, std::size_t end) { return Elements(nullptr, begin, end); }
+  static Elements owned(const ElementRef* list, std::size_t count) { return Elements(list, 0, count); }
+  static Elements owned(const std::vector<ElementRef>& list) { return owned(list.data(), list.size()); }
+  std::size_t count() const { return end_ - begin_; }
+
+  // Calls body(count, indexOf, maskOf) with the index and mask functions of this selection
+  // (function objects the compiler inlines into the kernel's loop, one copy per kind).
+  template <class Body>
+  void visit(Body&& body) const {
+    if (list_ != nullptr)
+      body(count(), ListIndex{list_}, ListMask{list_});
+    else
+      body(count(), RangeIndex{begin_}, AllVertices{});
+  }
+
+  struct RangeIndex {
+    std::size_t begin;
+    std::size_t operator()(std::size_t r) const { return begin + r; }
+  };
+  struct AllVertices {
+    uint32_t operator()(std::size_t) const { return ~0u; }
+  };
+  struct ListIndex {
+    const ElementRef* list;
+    std::size_t operator()(std::size_t r) const { return list[r].index; }
+  };
+  struct ListMask {
+    const ElementRef* list;
+    uint32_t operator()(std::size_t r) const { return list[r].mask; }
+  };
+
+ private:
+  Elements(const ElementRef* list, std::size_t begin, std::size_t end) : list_(list), begin_(begin), end_(end) {}
+  const ElementRef* list_;
+  std::size_t begin_, end_;
+};
+
 // A fixed set of worker threads that run one function on every thread and wait for all of
 // them (fork-join). The calling thread is thread 0 and takes part; workers spin briefly
 // between jobs (a step issues several in a row) and then sleep on a futex.

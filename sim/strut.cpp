@@ -137,19 +137,12 @@ __attribute__((always_inline)) inline void applyStrutList(const Strut* struts, s
 
 }  // namespace
 
-__attribute__((target_clones("avx2", "default"))) void applyStruts(const Strut* struts, std::size_t begin,
-                                                                   std::size_t end, const Vec3* x, const Vec3* v,
-                                                                   Vec3* f) {
-  applyStrutList(
-      struts, end - begin, [begin](std::size_t r) { return begin + r; }, [](std::size_t) { return 3u; }, x, v, f);
-}
-
-__attribute__((target_clones("avx2", "default"))) void applyStrutsOwned(const Strut* struts, const ElementRef* list,
-                                                                        std::size_t count, const Vec3* x,
-                                                                        const Vec3* v, Vec3* f) {
-  applyStrutList(
-      struts, count, [list](std::size_t r) { return list[r].index; }, [list](std::size_t r) { return list[r].mask; },
-      x, v, f);
+// The visitor is inlined too, for the same reason as applyStrutList: each clone gets its own
+// copy of both loops (range and list).
+__attribute__((target_clones("avx2", "default"))) void applyStruts(const Strut* struts, Elements elements,
+                                                                   const Vec3* x, const Vec3* v, Vec3* f) {
+  elements.visit([&](std::size_t count, auto indexOf, auto maskOf)
+                     __attribute__((always_inline)) { applyStrutList(struts, count, indexOf, maskOf, x, v, f); });
 }
 
 namespace {

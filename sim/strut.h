@@ -13,12 +13,9 @@
 
 namespace springy {
 
-// Accumulates the forces of struts [begin, end) into f.
-void applyStruts(const Strut* struts, std::size_t begin, std::size_t end, const Vec3* x, const Vec3* v, Vec3* f);
-// The same for the listed struts, adding only to the ends whose bit is set in the reference's
-// mask (bit 0: i, bit 1: j; a thread's share, sim/parallel.h).
-void applyStrutsOwned(const Strut* struts, const ElementRef* list, std::size_t count, const Vec3* x, const Vec3* v,
-                 Vec3* f);
+// Accumulates the forces of the selected struts into f (all of a range, or a thread's list
+// adding only to the ends its masks name: bit 0 i, bit 1 j; sim/parallel.h).
+void applyStruts(const Strut* struts, Elements elements, const Vec3* x, const Vec3* v, Vec3* f);
 
 // Elastic energy 1/2 k (l - l0)^2 summed over struts [begin, end), and the largest strain
 // |l - l0| / l0 among them. The energies are summed in four interleaved partial sums (struts

@@ -92,7 +92,7 @@ TEST(Strut, ForcesFollowHookeAndDashpotLaws) {
   const Vec3 x[2] = {{0, 0, 0}, {0, 2.5, 0}};
   const Vec3 v[2] = {{0, 0, 0}, {1.0, 0.2, 0}};  // only the 0.2 along the strut is damped
   Vec3 f[2] = {};
-  applyStruts(&s, 0, 1, x, v, f);
+  applyStruts(&s, Elements::range(0, 1), x, v, f);
   EXPECT_DOUBLE_EQ(f[0].y, 10.0 * 0.5 + 3.0 * 0.2);
   EXPECT_DOUBLE_EQ(f[1].y, -f[0].y);
   EXPECT_DOUBLE_EQ(f[0].x, 0.0);
@@ -107,7 +107,7 @@ TEST_P(HingeAngles, ForcesSumToZeroWithZeroTorque) {
   x[3] += Vec3{0.1, 0.05, -0.2};  // asymmetric
   const std::vector<Vec3> v = {{0.3, -0.2, 0.1}, {-0.5, 0.4, 0.2}, {0.1, 0.9, -1.0}, {0.7, -0.3, 0.4}};
   std::vector<Vec3> f(4);
-  applyHinges(model.hinges.data(), 0, 1, x.data(), v.data(), f.data());
+  applyHingesDerivingTerms(model.hinges.data(), 0, 1, x.data(), v.data(), f.data());
   Vec3 sum, torque;
   double scale = 0.0;
   for (int i = 0; i < 4; ++i) {
@@ -127,7 +127,7 @@ TEST_P(HingeAngles, ElasticForceIsMinusTheEnergyGradient) {
   std::vector<Vec3> x = test::hingePositions(theta);
   x[2] += Vec3{0.05, -0.1, 0.02};
   std::vector<Vec3> v(4), f(4);
-  applyHinges(model.hinges.data(), 0, 1, x.data(), v.data(), f.data());
+  applyHingesDerivingTerms(model.hinges.data(), 0, 1, x.data(), v.data(), f.data());
   const std::vector<Vec3> expected = minusEnergyGradient(model.hinges.data(), 1, x, 1e-6);
   for (int i = 0; i < 4; ++i) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(f[i][c], expected[i][c], 1e-6) << "vertex " << i << " component " << c;
@@ -142,7 +142,7 @@ TEST_P(HingeAngles, RestAngleMatchesTheForceConvention) {
   EXPECT_NEAR(dihedralAngle(model.restPosition[0], model.restPosition[1], model.restPosition[2], model.restPosition[3]),
               theta, 1e-12);
   std::vector<Vec3> v(4), f(4);
-  applyHinges(model.hinges.data(), 0, 1, model.restPosition.data(), v.data(), f.data());
+  applyHingesDerivingTerms(model.hinges.data(), 0, 1, model.restPosition.data(), v.data(), f.data());
   for (const Vec3& fi : f) EXPECT_LT(length(fi), 1e-12);
 }
 
@@ -214,7 +214,7 @@ TEST(Hinge, CrushedFaceFadesOutConservatively) {
     ASSERT_TRUE(hingeGeometry(x[0], x[1], x[2], x[3], g));
     EXPECT_NEAR(g.leverLeft, fraction * h.minLever[0], 1e-9 * h.minLever[0]);
     std::vector<Vec3> v(4), f(4);
-    applyHinges(&h, 0, 1, x.data(), v.data(), f.data());
+    applyHingesDerivingTerms(&h, 0, 1, x.data(), v.data(), f.data());
     double largest = 0.0;
     Vec3 sum;
     for (const Vec3& fi : f) {
@@ -267,7 +267,7 @@ TEST(Hinge, FastKernelMatchesTheReferenceFormulas) {
       // faded energy (hingeEnergy), by central differences.
       guardCases++;
       std::vector<Vec3> still(4), f(4);
-      applyHinges(&h, 0, 1, x.data(), still.data(), f.data());
+      applyHingesDerivingTerms(&h, 0, 1, x.data(), still.data(), f.data());
       double largest = 0.0;
       for (const Vec3& fi : f) largest = std::max(largest, length(fi));
       const std::vector<Vec3> expected = minusEnergyGradient(&h, 1, x, 1e-7);
@@ -280,7 +280,7 @@ TEST(Hinge, FastKernelMatchesTheReferenceFormulas) {
     for (int i = 0; i < 4; ++i) rate += dot(g.grad[i], v[static_cast<std::size_t>(i)]);
     const double torque = h.stiffness * delta + h.damping * rate;
     std::vector<Vec3> f(4);
-    applyHinges(&h, 0, 1, x.data(), v.data(), f.data());
+    applyHingesDerivingTerms(&h, 0, 1, x.data(), v.data(), f.data());
     double scale = 0.0;
     for (int i = 0; i < 4; ++i) scale = std::max(scale, length(g.grad[i] * torque));
     for (int i = 0; i < 4; ++i) {
@@ -422,23 +422,24 @@ TEST(Strut, FourStrutPacketsEqualTheOneAtATimeKernelExactly) {
   const Strut& collapsed = model.struts[42];
   x[collapsed.j] = x[collapsed.i];
   std::vector<Vec3> packets(x.size()), single(x.size());
-  applyStruts(model.struts.data(), 0, model.struts.size(), x.data(), v.data(), packets.data());
+  applyStruts(model.struts.data(), Elements::range(0, model.struts.size()), x.data(), v.data(), packets.data());
   for (std::size_t s = 0; s < model.struts.size(); ++s) {
-    applyStruts(model.struts.data(), s, s + 1, x.data(), v.data(), single.data());
+    applyStruts(model.struts.data(), Elements::range(s, s + 1), x.data(), v.data(), single.data());
   }
   for (std::size_t i = 0; i < x.size(); ++i) ASSERT_EQ(packets[i], single[i]) << "vertex " << i;
   // The collapsed strut adds nothing: its ends' forces are those of their other struts.
   std::vector<Vec3> without(x.size());
   for (std::size_t s = 0; s < model.struts.size(); ++s) {
-    if (s != 42) applyStruts(model.struts.data(), s, s + 1, x.data(), v.data(), without.data());
+    if (s != 42) applyStruts(model.struts.data(), Elements::range(s, s + 1), x.data(), v.data(), without.data());
   }
   EXPECT_EQ(single[collapsed.i], without[collapsed.i]);
   // A thread's list (every third strut, alternating masks) against one strut at a time.
   std::vector<ElementRef> list;
   for (uint32_t s = 0; s < model.struts.size(); s += 3) list.push_back({s, 1u + (s / 3) % 3});
   std::vector<Vec3> owned(x.size()), reference(x.size());
-  applyStrutsOwned(model.struts.data(), list.data(), list.size(), x.data(), v.data(), owned.data());
-  for (const ElementRef& r : list) applyStrutsOwned(model.struts.data(), &r, 1, x.data(), v.data(), reference.data());
+  applyStruts(model.struts.data(), Elements::owned(list), x.data(), v.data(), owned.data());
+  for (const ElementRef& r : list)
+    applyStruts(model.struts.data(), Elements::owned(&r, 1), x.data(), v.data(), reference.data());
   for (std::size_t i = 0; i < x.size(); ++i) ASSERT_EQ(owned[i], reference[i]) << "vertex " << i;
 }
 
@@ -464,9 +465,10 @@ TEST(Hinge, FourHingePacketsEqualTheOneAtATimeKernelExactly) {
   std::vector<HingeTerms> terms;
   for (const Hinge& h : model.hinges) terms.push_back(hingeTerms(h));
   std::vector<Vec3> packets(x.size()), single(x.size());
-  applyHinges(model.hinges.data(), terms.data(), 0, model.hinges.size(), x.data(), v.data(), packets.data());
+  applyHinges(model.hinges.data(), terms.data(), Elements::range(0, model.hinges.size()), x.data(), v.data(),
+              packets.data());
   for (std::size_t k = 0; k < model.hinges.size(); ++k) {
-    applyHinges(model.hinges.data(), terms.data(), k, k + 1, x.data(), v.data(), single.data());
+    applyHinges(model.hinges.data(), terms.data(), Elements::range(k, k + 1), x.data(), v.data(), single.data());
   }
   std::size_t nonzero = 0;
   for (std::size_t i = 0; i < x.size(); ++i) {
@@ -478,9 +480,9 @@ TEST(Hinge, FourHingePacketsEqualTheOneAtATimeKernelExactly) {
   std::vector<ElementRef> list;
   for (uint32_t k = 0; k < model.hinges.size(); k += 2) list.push_back({k, (k % 3 == 0) ? 0xFu : 0x5u});
   std::vector<Vec3> owned(x.size()), ownedSingle(x.size());
-  applyHingesOwned(model.hinges.data(), terms.data(), list.data(), list.size(), x.data(), v.data(), owned.data());
+  applyHinges(model.hinges.data(), terms.data(), Elements::owned(list), x.data(), v.data(), owned.data());
   for (const ElementRef& r : list) {
-    applyHingesOwned(model.hinges.data(), terms.data(), &r, 1, x.data(), v.data(), ownedSingle.data());
+    applyHinges(model.hinges.data(), terms.data(), Elements::owned(&r, 1), x.data(), v.data(), ownedSingle.data());
   }
   for (std::size_t i = 0; i < x.size(); ++i) ASSERT_EQ(owned[i], ownedSingle[i]) << "vertex " << i;
 }

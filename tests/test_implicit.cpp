@@ -66,7 +66,9 @@ TEST(StrutJacobian, MatchesFiniteDifferencesOfTheForce) {
     Eigen::MatrixXd J(6, 6), Jv(6, 6);
     J << -kx, kx, kx, -kx;
     Jv << -kv, kv, kv, -kv;
-    const ForceFn f = [&](const Vec3* xx, const Vec3* vv, Vec3* ff) { applyStruts(&st, 0, 1, xx, vv, ff); };
+    const ForceFn f = [&](const Vec3* xx, const Vec3* vv, Vec3* ff) {
+      applyStruts(&st, Elements::range(0, 1), xx, vv, ff);
+    };
     EXPECT_LT(relativeError(J, finiteDifference(f, x, v, {0, 1}, false, 1e-6)), 1e-7) << "trial " << trial;
     EXPECT_LT(relativeError(Jv, finiteDifference(f, x, v, {0, 1}, true, 1e-6)), 1e-7) << "trial " << trial;
     // The definite part is symmetric positive semidefinite.
@@ -111,7 +113,7 @@ TEST_P(HingeShapes, HingeJacobianMatchesFiniteDifferencesOfTheForce) {
   }
   Matrix12 jx, jv;
   ASSERT_TRUE(hingeJacobian(hg, x.data(), v.data(), jx, jv, false));
-  const ForceFn f = [&](const Vec3* xx, const Vec3* vv, Vec3* ff) { applyHinges(&hg, 0, 1, xx, vv, ff); };
+  const ForceFn f = [&](const Vec3* xx, const Vec3* vv, Vec3* ff) { applyHingesDerivingTerms(&hg, 0, 1, xx, vv, ff); };
   EXPECT_LT(relativeError(jx, finiteDifference(f, x, v, {0, 1, 2, 3}, false, 1e-6)), 1e-6);
   EXPECT_LT(relativeError(jv, finiteDifference(f, x, v, {0, 1, 2, 3}, true, 1e-6)), 1e-7);
 }

@@ -70,7 +70,7 @@ int runCheck(const CheckOptions& options) {
     }
     std::printf("], collide: %s, threads: %u\n", world.collides() ? "yes" : "no", world.threads());
     // Sample at the render frame rate: the states a video would show are the ones checked.
-    const double frame = 1.0 / scene.render.fps;
+    const double frame = 1.0 / scene.view.render.fps;
     const long frames = std::lround(scene.duration / frame);
     std::optional<Failure> failure;
     // At rest at the end (RestWatch): the frames of the last second.

@@ -32,7 +32,7 @@ double msSince(Clock::time_point t) { return std::chrono::duration<double, std::
 // The command line's values get the same ranges as the scene's [render] keys (sim/scene.cpp), with
 // a message naming the option: a value out of range is an error, never clamped.
 void applyRenderOverrides(SceneDesc& scene, const RenderOverrides& o) {
-  RenderDesc& r = scene.render;
+  RenderDesc& r = scene.view.render;
   auto size = [](const char* option, int value, int most) {
     if (value < 16 || value > most || value % 2) {
       throw Error(std::string(option) + " " + std::to_string(value) + ": must be even and between 16 and " +
@@ -127,11 +127,11 @@ const char* signalName(int signal) {
 
 render::VideoSettings videoSettingsOf(const SceneDesc& scene, const RenderEnvironment& env) {
   render::VideoSettings vs;
-  vs.width = scene.render.width;
-  vs.height = scene.render.height;
-  vs.fps = scene.render.fps;
-  vs.crf = scene.render.crf;
-  vs.preset = scene.render.preset;
+  vs.width = scene.view.render.width;
+  vs.height = scene.view.render.height;
+  vs.fps = scene.view.render.fps;
+  vs.crf = scene.view.render.crf;
+  vs.preset = scene.view.render.preset;
   if (env.x264Threads) vs.threads = *env.x264Threads;
   return vs;
 }
@@ -145,8 +145,8 @@ void printSummary(const std::string& path, const std::string& outPath, const Sce
   const double size = ::stat(outPath.c_str(), &st) == 0 ? static_cast<double>(st.st_size) : 0.0;
   const double n = static_cast<double>(frames);
   std::printf("%s -> %s: %ld frames, %.2f s of %dx%d video at %g fps (%s), %.1f MB\n", path.c_str(), outPath.c_str(),
-              frames, n / scene.render.fps, scene.render.width, scene.render.height,
-              scene.render.fps, encoder.codecName().c_str(), size / 1e6);
+              frames, n / scene.view.render.fps, scene.view.render.width, scene.view.render.height,
+              scene.view.render.fps, encoder.codecName().c_str(), size / 1e6);
   std::printf("  wall %.1f s (%.1f frames/s); per frame: simulate %.1f ms, render %.1f ms, read back %.1f ms, "
               "convert %.1f ms, encode %.1f ms (%s)\n",
               wallSeconds, n / wallSeconds, run.simulateMs / n,
@@ -187,10 +187,10 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
 
   FramePipelineSettings pipeline;
   pipeline.label = scene.name;
-  pipeline.frames = std::max(1L, std::lround(scene.duration * scene.render.fps));
-  pipeline.fps = scene.render.fps;
-  pipeline.width = scene.render.width;
-  pipeline.height = scene.render.height;
+  pipeline.frames = std::max(1L, std::lround(scene.duration * scene.view.render.fps));
+  pipeline.fps = scene.view.render.fps;
+  pipeline.width = scene.view.render.width;
+  pipeline.height = scene.view.render.height;
   pipeline.serial = env.serial;
   const auto wallStart = Clock::now();
   FramePipelineResult run;
@@ -299,7 +299,7 @@ int framesOne(const std::string& path, const FramesOptions& options) {
   SceneView view(scene, world, renderSettingsOf(scene));
   std::vector<render::Image> stills;
   std::vector<std::string> labels;
-  const double frame = 1.0 / scene.render.fps;
+  const double frame = 1.0 / scene.view.render.fps;
   auto stopped = [&](const std::string& what) {
     std::cerr << "springy frames: interrupted by " << signalName(interruptSignal()) << "; " << what
               << " not written\n";

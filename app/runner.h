@@ -6,8 +6,8 @@
 #include <optional>
 #include <string>
 
+#include "scene/scene.h"
 #include "sim/monitor.h"
-#include "sim/scene.h"
 
 namespace springy {
 

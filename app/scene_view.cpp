@@ -30,7 +30,7 @@ Vec3 forwardFromAngles(const Vec3& degrees) {
 }  // namespace
 
 void checkCamera(const SceneDesc& scene) {
-  const CameraDesc& c = scene.render.camera;
+  const CameraDesc& c = scene.view.render.camera;
   if (c.position && c.target && *c.position == *c.target) {
     char at[128];
     std::snprintf(at, sizeof at, "[%g, %g, %g]", c.position->x, c.position->y, c.position->z);
@@ -41,11 +41,11 @@ void checkCamera(const SceneDesc& scene) {
 
 render::RenderSettings renderSettingsOf(const SceneDesc& scene) {
   render::RenderSettings s;
-  s.width = scene.render.width;
-  s.height = scene.render.height;
-  s.antiAlias = scene.render.antialias;
-  s.shadows = scene.render.shadows;
-  s.shadowMapSize = scene.render.shadowMapSize;
+  s.width = scene.view.render.width;
+  s.height = scene.view.render.height;
+  s.antiAlias = scene.view.render.antialias;
+  s.shadows = scene.view.render.shadows;
+  s.shadowMapSize = scene.view.render.shadowMapSize;
   return s;
 }
 
@@ -53,19 +53,19 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
     : scene_(scene), renderer_(settings) {
   checkCamera(scene);
   const Model& model = world.model();
-  const RenderDesc& rd = scene.render;
+  const RenderDesc& rd = scene.view.render;
   integrator_ = std::string(integratorName(world.integrator()));
   Bounds all = boundsOf(world.positions());
   // The default camera frames where the bodies land too: their shadows straight down onto each
   // plane they are above (a body dropped onto the ground otherwise falls out of the picture).
   {
     const Bounds bodies = all;
-    for (const PlaneDesc& p : scene.planes) {
-      const Vec3 n = p.collider.normal;
+    for (const PlaneCollider& p : scene.planes) {
+      const Vec3 n = p.normal;
       for (int corner = 0; corner < 8; ++corner) {
         const Vec3 x{corner & 1 ? bodies.hi.x : bodies.lo.x, corner & 2 ? bodies.hi.y : bodies.lo.y,
                      corner & 4 ? bodies.hi.z : bodies.lo.z};
-        const double height = dot(x - p.collider.point, n);
+        const double height = dot(x - p.point, n);
         if (!(height > 0.0) || !(height < 1e3 * length(bodies.size()) + 1.0)) continue;
         const Vec3 landing = x - n * height;
         all = {componentMin(all.lo, landing), componentMax(all.hi, landing)};
@@ -88,35 +88,38 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
       }
       for (const Triangle& t : desc.drawMesh.triangles) indices.insert(indices.end(), t.begin(), t.end());
       bodyMeshes_.push_back(renderer_.addDynamicMesh(static_cast<uint32_t>(desc.drawMesh.positions.size()), indices,
-                                                     toMaterial(scene.bodyMaterials[b])));
+                                                     toMaterial(scene.view.bodies[b])));
       continue;
     }
     indices.reserve(static_cast<std::size_t>(info.faceCount) * 3);
     for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
       for (uint32_t v : model.faces[f]) indices.push_back(v - info.firstVertex);
     }
-    bodyMeshes_.push_back(renderer_.addDynamicMesh(info.vertexCount, indices, toMaterial(scene.bodyMaterials[b])));
+    bodyMeshes_.push_back(renderer_.addDynamicMesh(info.vertexCount, indices, toMaterial(scene.view.bodies[b])));
   }
-  for (const PlaneDesc& p : scene.planes) {
-    if (!p.visible) continue;
-    const glm::vec3 c = toGlm(p.material.color);
+  for (std::size_t p = 0; p < scene.planes.size(); ++p) {
+    const PlaneCollider& plane = scene.planes[p];
+    const SurfaceLook& look = scene.view.planes[p];
+    if (!look.visible) continue;
+    const glm::vec3 c = toGlm(look.material.color);
     // Two tones of the plane's colour make the checker that shows depth.
-    renderer_.addGround(toGlm(p.collider.point), toGlm(p.collider.normal), static_cast<float>(p.extent), c * 1.12f,
-                        c * 0.88f, 2.0f);
+    renderer_.addGround(toGlm(plane.point), toGlm(plane.normal), static_cast<float>(look.extent), c * 1.12f, c * 0.88f,
+                        2.0f);
   }
-  for (const TriangleColliderDesc& t : scene.triangleColliders) {
-    const TriMesh& m = t.collider.mesh;
+  for (std::size_t c = 0; c < scene.triangleColliders.size(); ++c) {
+    const TriMesh& m = scene.triangleColliders[c].mesh;
+    const SurfaceLook& look = scene.view.triangleColliders[c];
     all = {componentMin(all.lo, boundsOf(m.positions).lo), componentMax(all.hi, boundsOf(m.positions).hi)};
-    if (!t.visible) continue;
+    if (!look.visible) continue;
     std::vector<float> xyz;
     std::vector<uint32_t> indices;
     for (const Vec3& p : m.positions) {
       for (int k = 0; k < 3; ++k) xyz.push_back(static_cast<float>(p[k]));
     }
     for (const Triangle& tri : m.triangles) indices.insert(indices.end(), tri.begin(), tri.end());
-    renderer_.addStaticMesh(xyz, indices, toMaterial(t.material));
+    renderer_.addStaticMesh(xyz, indices, toMaterial(look.material));
   }
-  for (const PropDesc& p : scene.props) {
+  for (const PropDesc& p : scene.view.props) {
     const render::MeshData mesh = p.shape == PropDesc::Shape::Box
                                       ? render::makeBox(toGlm(p.center), toGlm(p.size) * 0.5f)
                                       : render::makeCylinder(toGlm(p.from), toGlm(p.to), static_cast<float>(p.radius));
@@ -176,7 +179,7 @@ void SceneView::draw(const FrameSnapshot& snapshot) {
     }
     offset += n;
   }
-  if (scene_.render.overlay) {
+  if (scene_.view.render.overlay) {
     char time[64], method[96];
     std::snprintf(time, sizeof time, "t = %.2f s", snapshot.time);
     std::snprintf(method, sizeof method, "%s, dt = %g ms%s", integrator_.c_str(), snapshot.dt * 1000.0, "");

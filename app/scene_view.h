@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "render/renderer.h"
-#include "sim/scene.h"
+#include "scene/scene.h"
 
 namespace springy {
 

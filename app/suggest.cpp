@@ -52,12 +52,12 @@ double squashHorizon(const SceneDesc& scene) {
   double latest = -1.0;
   for (const BodyDesc& b : scene.bodies) {
     double first = INFINITY;
-    for (const PlaneDesc& p : scene.planes) {
-      const Vec3 n = p.collider.normal;
+    for (const PlaneCollider& p : scene.planes) {
+      const Vec3 n = p.normal;
       const double a = g > 0.0 ? -dot(scene.gravity, n) : 0.0;  // acceleration toward the plane
       if (!(a > 0.0)) continue;
       double h = INFINITY;
-      for (const Vec3& x : b.mesh.positions) h = std::min(h, dot(x - p.collider.point, n));
+      for (const Vec3& x : b.mesh.positions) h = std::min(h, dot(x - p.point, n));
       const double u = -dot(b.velocity, n);  // initial speed toward it
       first = std::min(first, (-u + std::sqrt(std::max(0.0, u * u + 2 * a * std::max(0.0, h)))) / a);
     }

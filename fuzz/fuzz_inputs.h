@@ -13,10 +13,10 @@
 #include <string>
 #include <string_view>
 
+#include "scene/scene.h"
 #include "sim/error.h"
 #include "sim/mesh_io.h"
 #include "sim/model.h"
-#include "sim/scene.h"
 
 namespace springy::fuzz {
 

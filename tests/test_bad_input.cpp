@@ -21,11 +21,11 @@
 #include <vector>
 
 #include "run_springy.h"
+#include "scene/scene.h"
 #include "sim/error.h"
 #include "sim/limits.h"
 #include "sim/mesh_io.h"
 #include "sim/proxy.h"
-#include "sim/scene.h"
 #include "sim/shapes.h"
 
 namespace springy {

@@ -5,9 +5,9 @@
 #include <cmath>
 
 #include "fixtures.h"
+#include "scene/scene.h"
 #include "sim/diagnostics.h"
 #include "sim/monitor.h"
-#include "sim/scene.h"
 #include "sim/shapes.h"
 
 #include <algorithm>
@@ -307,7 +307,7 @@ TEST(Wind, GustsRepeatForASeedAndDifferBetweenSeeds) {
   body.name = "b";
   body.mesh = makeTetrahedron(1.0);
   scene.bodies = {body};
-  scene.bodyMaterials = {Material{}};
+  scene.view.bodies = {Material{}};
   auto gusts = [&](uint64_t seed) {
     scene.wind->seed = seed;
     const Model model = buildModel(scene);

@@ -15,8 +15,8 @@
 #include <sstream>
 #include <string>
 
+#include "scene/scene.h"
 #include "sim/diagnostics.h"
-#include "sim/scene.h"
 #include "sim/world.h"
 
 namespace springy {

@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
+#include "scene/scene.h"
 #include "sim/diagnostics.h"
 #include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/model.h"
-#include "sim/scene.h"
 #include "sim/shapes.h"
 #include "sim/stability.h"
 #include "sim/world.h"

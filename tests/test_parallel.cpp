@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
+#include "scene/scene.h"
 #include "sim/diagnostics.h"
 #include "sim/error.h"
 #include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/parallel.h"
-#include "sim/scene.h"
 #include "sim/strut.h"
 #include "sim/world.h"
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "scene/scene.h"
 #include "sim/error.h"
 #include "sim/mesh.h"
-#include "sim/scene.h"
 #include "sim/world.h"
 
 namespace springy {
@@ -77,8 +77,8 @@ TEST(Scene, MinimalSceneParsesWithDefaults) {
   EXPECT_FALSE(scene.wind.has_value());
   EXPECT_TRUE(scene.planes.empty());
   EXPECT_TRUE(scene.triangleColliders.empty());
-  EXPECT_EQ(scene.render.width, 1280);
-  EXPECT_EQ(scene.render.height, 720);
+  EXPECT_EQ(scene.view.render.width, 1280);
+  EXPECT_EQ(scene.view.render.height, 720);
 
   ASSERT_EQ(scene.bodies.size(), 1u);
   const BodyDesc& body = scene.bodies[0];
@@ -167,15 +167,15 @@ ambient = 0.2
   EXPECT_EQ(scene.wind->pressure, 1.5);
   EXPECT_EQ(scene.wind->seed, 9u);
   EXPECT_EQ(scene.bodies[0].velocity, (Vec3{1, 2, 3}));
-  EXPECT_EQ(scene.bodyMaterials[0].color, (Vec3{0.1, 0.2, 0.3}));
-  ASSERT_EQ(scene.props.size(), 1u);
-  EXPECT_EQ(scene.props[0].shape, PropDesc::Shape::Box);
-  EXPECT_EQ(scene.props[0].size, (Vec3{4, 5, 6}));
-  EXPECT_EQ(scene.render.width, 640);
-  EXPECT_EQ(scene.render.fps, 25.0);
-  EXPECT_EQ(scene.render.camera.target, (Vec3{0, 5, 0}));
-  EXPECT_EQ(scene.render.camera.fov, 45.0);
-  EXPECT_EQ(scene.render.light.ambient, 0.2);
+  EXPECT_EQ(scene.view.bodies[0].color, (Vec3{0.1, 0.2, 0.3}));
+  ASSERT_EQ(scene.view.props.size(), 1u);
+  EXPECT_EQ(scene.view.props[0].shape, PropDesc::Shape::Box);
+  EXPECT_EQ(scene.view.props[0].size, (Vec3{4, 5, 6}));
+  EXPECT_EQ(scene.view.render.width, 640);
+  EXPECT_EQ(scene.view.render.fps, 25.0);
+  EXPECT_EQ(scene.view.render.camera.target, (Vec3{0, 5, 0}));
+  EXPECT_EQ(scene.view.render.camera.fov, 45.0);
+  EXPECT_EQ(scene.view.render.light.ambient, 0.2);
 
   const Model model = buildModel(scene);
   EXPECT_EQ(model.gravity, (Vec3{0, -1.62, 0}));
@@ -196,8 +196,8 @@ TEST(Scene, LoadsFilesAndResolvesMeshPathsRelativeToTheScene) {
   ASSERT_EQ(scene.bodies.size(), 1u);
   EXPECT_EQ(scene.bodies[0].mesh.positions.size(), 42u);  // icosphere level 1
   ASSERT_EQ(scene.planes.size(), 1u);
-  EXPECT_EQ(scene.planes[0].collider.material.restitution, 0.4);
-  EXPECT_EQ(scene.planes[0].collider.material.friction, 0.6);
+  EXPECT_EQ(scene.planes[0].material.restitution, 0.4);
+  EXPECT_EQ(scene.planes[0].material.friction, 0.6);
   const Model model = buildModel(scene);
   EXPECT_NEAR(model.colliders.restingSpeed, 4 * 9.81 * 0.0005, 1e-15);  // automatic: 4 |g| dt
 
@@ -207,7 +207,7 @@ TEST(Scene, LoadsFilesAndResolvesMeshPathsRelativeToTheScene) {
   EXPECT_EQ(meshes.bodies[0].mesh.positions.size(), 8u);  // the STL cube, welded
   EXPECT_NEAR(signedVolume(meshes.bodies[0].mesh.positions, meshes.bodies[0].mesh.triangles), 8.0, 1e-12);
   ASSERT_EQ(meshes.triangleColliders.size(), 1u);
-  const TriangleCollider& box = meshes.triangleColliders[0].collider;
+  const TriangleCollider& box = meshes.triangleColliders[0];
   EXPECT_EQ(box.name, "box");
   EXPECT_EQ(box.mesh.triangles.size(), 12u);
   // Moved by its position.
@@ -460,9 +460,9 @@ friction = 0.5
 )";
   const SceneDesc scene = parseScene(text, kPath);
   ASSERT_EQ(scene.planes.size(), 1u);
-  EXPECT_EQ(scene.planes[0].collider.normal, (Vec3{0, 1, 0}));  // normalised
+  EXPECT_EQ(scene.planes[0].normal, (Vec3{0, 1, 0}));  // normalised
   ASSERT_EQ(scene.triangleColliders.size(), 1u);
-  const TriangleCollider& ramp = scene.triangleColliders[0].collider;
+  const TriangleCollider& ramp = scene.triangleColliders[0];
   EXPECT_EQ(ramp.name, "ramp");
   EXPECT_EQ(ramp.mesh.positions.size(), 8u);
   ASSERT_EQ(ramp.mesh.triangles.size(), 4u);  // two per quad
@@ -493,7 +493,7 @@ friction = 0.5
   const SceneDesc tri = parseScene(kBody + "[[triangles]]\nvertices = [[0, 0, 0], [1, 0, 0], [0, 0, 1]]\n"
                                            "indices = [[0, 2, 1]]\n",
                                    kPath);
-  EXPECT_EQ(tri.triangleColliders[0].collider.mesh.triangles[0], (Triangle{0, 2, 1}));
+  EXPECT_EQ(tri.triangleColliders[0].mesh.triangles[0], (Triangle{0, 2, 1}));
   expectError(kBody + "[[triangles]]\nvertices = [[0, 0, 0], [1, 0, 0], [0, 0, 1]]\nindices = [[0, 2, 3]]\n", 9,
               {"'indices'"});
   expectError(kBody + "[[triangles]]\nquads = [[[0, 0, 0], [1, 0, 0], [0, 0, 1]]]\n", 8, {"'quads'", "four corners"});

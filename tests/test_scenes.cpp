@@ -8,9 +8,9 @@
 #include <cmath>
 #include <limits>
 
+#include "scene/scene.h"
 #include "sim/diagnostics.h"
 #include "sim/monitor.h"
-#include "sim/scene.h"
 
 namespace springy {
 namespace {

@@ -1,5 +1,6 @@
-#include "sim/scene.h"
+#include "scene/scene.h"
 
+#include <toml++/toml.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -8,7 +9,6 @@
 #include <iterator>
 #include <limits>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "sim/error.h"
 #include "sim/limits.h"
@@ -65,7 +65,8 @@ class Reader {
     const toml::node* n = get(key);
     if (!n) return fallback;
     const double value = asNumber(*n, key);
-    if (!(value >= lo && value <= hi)) fail(*n, key, "must be in [" + format(lo) + ", " + format(hi) + "], got " + format(value));
+    if (!(value >= lo && value <= hi))
+      fail(*n, key, "must be in [" + format(lo) + ", " + format(hi) + "], got " + format(value));
     return value;
   }
   int integer(std::string_view key, int fallback, int lo, int hi) {
@@ -74,7 +75,9 @@ class Reader {
     const auto* v = n->as_integer();
     if (!v) fail(*n, key, "must be an integer");
     if (v->get() < lo || v->get() > hi) {
-      fail(*n, key, "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + std::to_string(v->get()));
+      fail(
+          *n, key,
+          "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + std::to_string(v->get()));
     }
     return static_cast<int>(v->get());
   }
@@ -180,9 +183,7 @@ Vec3 rotate(const Vec3& p, const Vec3& degrees) {
 
 struct Transform {
   Vec3 scale{1, 1, 1}, rotation, position;
-  Vec3 apply(const Vec3& p) const {
-    return rotate({p.x * scale.x, p.y * scale.y, p.z * scale.z}, rotation) + position;
-  }
+  Vec3 apply(const Vec3& p) const { return rotate({p.x * scale.x, p.y * scale.y, p.z * scale.z}, rotation) + position; }
 };
 
 Transform readTransform(Reader& r) {
@@ -249,8 +250,8 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   BodyDesc b;
   b.source = location(path, table.source()) + ": [[body]] #" + std::to_string(index + 1);
   b.name = r.string("name", "body " + std::to_string(index + 1));
-  const std::string shape =
-      r.choice("shape", "octahedron_sphere", {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mesh"});
+  const std::string shape = r.choice("shape", "octahedron_sphere",
+                                     {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mesh"});
   // Shape parameters: each shape reads only its own keys; the others are then unknown keys.
   TriMesh mesh;
   try {
@@ -280,8 +281,9 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
         if (proxy == "always") reason = "proxy = \"always\"";
         if (reason) {
           ProxyOptions options;
-          options.targetVertices = proxyVertices > 0 ? static_cast<std::size_t>(proxyVertices)
-                                                     : std::clamp<std::size_t>(mesh.positions.size(), 162, kProxyDefaultMaxVertices);
+          options.targetVertices = proxyVertices > 0
+                                       ? static_cast<std::size_t>(proxyVertices)
+                                       : std::clamp<std::size_t>(mesh.positions.size(), 162, kProxyDefaultMaxVertices);
           const ProxyResult built = buildProxy(mesh, options);
           b.drawMesh = std::move(mesh);
           mesh = built.mesh;
@@ -312,7 +314,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.velocity = r.vec3("velocity", {});
   b.angularVelocity = r.vec3("angular_velocity", {});
   b.model = r.choice("model", "springy", {"springy", "all_pairs"}) == "all_pairs" ? SpringModel::AllPairs
-                                                                               : SpringModel::Springy;
+                                                                                  : SpringModel::Springy;
   b.massDistribution = r.choice("mass_distribution", "area", {"area", "uniform"}) == "uniform"
                            ? MassDistribution::Uniform
                            : MassDistribution::AngleWeightedArea;
@@ -327,7 +329,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.mass = r.inRange("mass", b.mass, kMinMass, kMaxMass);
   // Material: the body's own (resolution independent, the default) or the seed's per element (docs/model.md §5),
   // which any element key selects (the showcase scenes' values keep their meaning).
-  static const char* const elementKeys[] = {"strut_period", "strut_decay", "hinge_period", "hinge_decay",
+  static const char* const elementKeys[] = {"strut_period",    "strut_decay",   "hinge_period",    "hinge_decay",
                                             "strut_stiffness", "strut_damping", "hinge_stiffness", "hinge_damping"};
   static const char* const bodyKeys[] = {"stretch_period", "bend_period", "deformation_decay"};
   const char* elementKey = nullptr;
@@ -335,8 +337,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
     if (!elementKey && r.has(k)) elementKey = k;
   }
   const bool allPairs = b.model == SpringModel::AllPairs;
-  const std::string stiffness =
-      r.choice("material", elementKey || allPairs ? "element" : "body", {"body", "element"});
+  const std::string stiffness = r.choice("material", elementKey || allPairs ? "element" : "body", {"body", "element"});
   if (stiffness == "body") {
     if (allPairs) r.fail(*r.get("material"), "material", "model = \"all_pairs\" takes material = \"element\"");
     if (elementKey) {
@@ -385,16 +386,18 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
     for (const toml::node& item : *a) {
       if (const auto* i = item.as_integer()) {
         if (i->get() < 0 || static_cast<std::size_t>(i->get()) >= b.mesh.positions.size()) {
-          r.fail(item, "pin", "vertex " + std::to_string(i->get()) + " does not exist (the body has " +
-                                  std::to_string(b.mesh.positions.size()) + " vertices)");
+          r.fail(item, "pin",
+                 "vertex " + std::to_string(i->get()) + " does not exist (the body has " +
+                     std::to_string(b.mesh.positions.size()) + " vertices)");
         }
         b.pinned.push_back(static_cast<uint32_t>(i->get()));
       } else if (const auto* s = item.as_string()) {
         static const std::vector<std::pair<std::string, std::pair<int, bool>>> rules = {
-            {"top", {1, true}},  {"bottom", {1, false}}, {"right", {0, true}},
-            {"left", {0, false}}, {"front", {2, false}}, {"back", {2, true}}};
+            {"top", {1, true}},   {"bottom", {1, false}}, {"right", {0, true}},
+            {"left", {0, false}}, {"front", {2, false}},  {"back", {2, true}}};
         auto it = std::find_if(rules.begin(), rules.end(), [&](auto& rule) { return rule.first == s->get(); });
-        if (it == rules.end()) r.fail(item, "pin", "unknown rule '" + s->get() + "' (top, bottom, left, right, front, back)");
+        if (it == rules.end())
+          r.fail(item, "pin", "unknown rule '" + s->get() + "' (top, bottom, left, right, front, back)");
         std::optional<uint32_t>& v = ruleVertex[static_cast<std::size_t>(it - rules.begin())];
         if (!v) v = extremeVertex(b.mesh, it->second.first, it->second.second);
         b.pinned.push_back(*v);
@@ -409,8 +412,9 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
     // A point as far from every vertex as the centre of a sphere has all of them at nearly one
     // distance, and any exact search examines them all: the count of points is what bounds it.
     if (a->size() > kMaxPinNear) {
-      r.fail(*n, "pin_near", std::to_string(a->size()) + " points, more than the limit of " +
-                                 std::to_string(kMaxPinNear) + " (pin vertex indices instead)");
+      r.fail(*n, "pin_near",
+             std::to_string(a->size()) + " points, more than the limit of " + std::to_string(kMaxPinNear) +
+                 " (pin vertex indices instead)");
     }
     // The nearest vertex (the lowest index among equals) searched outward from the point's x in
     // the vertices sorted by x: a few vertices per point instead of all of them.
@@ -430,7 +434,8 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
           bestIndex = i;
         }
       };
-      for (auto it = start; it != byX.end() && (it->first - p.x) * (it->first - p.x) <= best; ++it) consider(it->second);
+      for (auto it = start; it != byX.end() && (it->first - p.x) * (it->first - p.x) <= best; ++it)
+        consider(it->second);
       for (auto it = start; it != byX.begin() && (std::prev(it)->first - p.x) * (std::prev(it)->first - p.x) <= best;
            --it) {
         consider(std::prev(it)->second);
@@ -443,10 +448,10 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   return b;
 }
 
-TriangleColliderDesc readTriangleCollider(const toml::table& table, const std::string& path, std::size_t index) {
+TriangleCollider readTriangleCollider(const toml::table& table, const std::string& path, std::size_t index,
+                                      SurfaceLook& look) {
   Reader r(table, path, "[[triangles]] #" + std::to_string(index + 1));
-  TriangleColliderDesc d;
-  TriangleCollider& c = d.collider;
+  TriangleCollider c;
   c.name = r.string("name", "triangles " + std::to_string(index + 1));
   TriMesh& m = c.mesh;
   if (const toml::node* n = r.get("mesh")) {
@@ -491,11 +496,11 @@ TriangleColliderDesc readTriangleCollider(const toml::table& table, const std::s
   const Transform transform = readTransform(r);
   for (Vec3& p : m.positions) p = transform.apply(p);
   c.material = readContact(r);
-  d.material = readMaterial(r, Material{{0.55, 0.5, 0.45}, 1.0, 16.0});
-  d.visible = r.boolean("visible", true);
+  look.material = readMaterial(r, Material{{0.55, 0.5, 0.45}, 1.0, 16.0});
+  look.visible = r.boolean("visible", true);
   r.finish();  // first: a misspelt `quads` is an unknown key, not missing geometry
   if (m.triangles.empty()) r.failHere("needs triangles: mesh = \"FILE\", vertices + indices, or quads");
-  return d;
+  return c;
 }
 
 }  // namespace
@@ -550,7 +555,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
     for (std::size_t i = 0; i < bodies->size(); ++i) {
       Material material;
       scene.bodies.push_back(readBody(*bodies->get(i)->as_table(), path, i, material));
-      scene.bodyMaterials.push_back(material);
+      scene.view.bodies.push_back(material);
       // Checked body by body, so that memory stops growing at the body that crosses the limit.
       vertices += scene.bodies.back().mesh.positions.size();
       if (vertices > kMaxSceneVertices) {
@@ -563,29 +568,33 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
     top.get("plane");
     for (std::size_t i = 0; i < planes->size(); ++i) {
       Reader r(*planes->get(i)->as_table(), path, "[[plane]] #" + std::to_string(i + 1));
-      PlaneDesc p;
-      p.collider.point = r.vec3("point", {});
+      PlaneCollider p;
+      SurfaceLook look;
+      p.point = r.vec3("point", {});
       const toml::node* nn = r.get("normal");
       const Vec3 normal = nn ? r.asVec3(*nn, "normal") : Vec3{0, 1, 0};
       if (!(length(normal) > 0.0)) r.fail(*nn, "normal", "must not be zero");
-      p.collider.normal = normalized(normal);
-      p.collider.material = readContact(r);
-      p.collider.damping = r.inRange("damping", 0.0, 0.0, 1e6);
-      p.collider.layer = r.inRange("damping_layer", 0.0, 0.0, 1e6);
-      if ((p.collider.damping > 0.0) != (p.collider.layer > 0.0)) {
+      p.normal = normalized(normal);
+      p.material = readContact(r);
+      p.damping = r.inRange("damping", 0.0, 0.0, 1e6);
+      p.layer = r.inRange("damping_layer", 0.0, 0.0, 1e6);
+      if ((p.damping > 0.0) != (p.layer > 0.0)) {
         r.failHere("soft ground needs both damping (the rate, 1/s) and damping_layer (the thickness, m) positive");
       }
-      p.material = readMaterial(r, Material{{0.575, 0.54, 0.54}, 1.0, 8.0});
-      p.visible = r.boolean("visible", true);
-      p.extent = r.positive("extent", p.extent);
+      look.material = readMaterial(r, Material{{0.575, 0.54, 0.54}, 1.0, 8.0});
+      look.visible = r.boolean("visible", true);
+      look.extent = r.positive("extent", look.extent);
       r.finish();
       scene.planes.push_back(p);
+      scene.view.planes.push_back(look);
     }
   }
   if (const toml::array* tris = arrayOfTables(root, "triangles", path)) {
     top.get("triangles");
     for (std::size_t i = 0; i < tris->size(); ++i) {
-      scene.triangleColliders.push_back(readTriangleCollider(*tris->get(i)->as_table(), path, i));
+      SurfaceLook look;
+      scene.triangleColliders.push_back(readTriangleCollider(*tris->get(i)->as_table(), path, i, look));
+      scene.view.triangleColliders.push_back(look);
     }
   }
   if (const toml::array* props = arrayOfTables(root, "prop", path)) {
@@ -604,19 +613,20 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
       }
       p.material = readMaterial(r, Material{{0.45, 0.3, 0.2}, 1.0, 16.0});
       r.finish();
-      scene.props.push_back(p);
+      scene.view.props.push_back(p);
     }
   }
   if (const toml::table* t = top.subtable("render")) {
     Reader r(*t, path, "[render]");
-    RenderDesc& rd = scene.render;
+    RenderDesc& rd = scene.view.render;
     rd.width = r.integer("width", rd.width, 16, 7680);
     rd.height = r.integer("height", rd.height, 16, 4320);
     if (rd.width % 2 || rd.height % 2) r.failHere("width and height must be even (the video is yuv420p)");
     rd.fps = r.inRange("fps", rd.fps, 1.0, 240.0);
     rd.crf = r.integer("crf", rd.crf, 0, 51);
-    rd.preset = r.choice("preset", rd.preset,
-                         {"ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow"});
+    rd.preset =
+        r.choice("preset", rd.preset,
+                 {"ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow"});
     rd.shadows = r.boolean("shadows", rd.shadows);
     rd.antialias = r.boolean("antialias", rd.antialias);
     rd.overlay = r.boolean("overlay", rd.overlay);
@@ -652,7 +662,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
 
 std::optional<std::string> runSettingsProblem(const SceneDesc& scene) {
   std::ostringstream text;
-  const double frame = 1.0 / scene.render.fps;
+  const double frame = 1.0 / scene.view.render.fps;
   if (!(scene.dt <= frame * (1.0 + 1e-9))) {
     text << "dt = " << scene.dt << " s is longer than one frame (1/fps = " << frame
          << " s): the step must fit between two frames";
@@ -674,61 +684,6 @@ SceneDesc loadScene(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return parseScene(text.str(), path);
-}
-
-Model buildModel(const SceneDesc& scene) {
-  Model model;
-  model.gravity = scene.gravity;
-  model.drag = scene.drag;
-  if (scene.wind) {
-    Wind w = *scene.wind;
-    // Gust phases and frequency spread from a splitmix64 sequence of the seed: the same seed
-    // gives the same gusts on every platform (no std:: distribution involved).
-    uint64_t state = w.seed;
-    auto next = [&state] {
-      uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-      z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-      return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
-    };
-    for (int i = 0; i < 4; ++i) {
-      w.phase[i] = 2 * kPi * next();
-      w.frequency[i] = (0.5 + next()) / w.gustPeriod * (1.0 + 0.37 * i);
-    }
-    model.wind = w;
-  }
-  for (const BodyDesc& b : scene.bodies) {
-    try {
-      addBody(model, b);
-    } catch (const Error& e) {
-      throw Error((b.source.empty() ? scene.path : b.source) + ": " + e.what());
-    }
-  }
-  // A body that starts inside a plane's solid is pushed out violently on the first step (the
-  // monitor then reports energy rising from nothing): say where instead.
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
-    const BodyDesc& body = scene.bodies[b];
-    const double size = length(boundsOf(body.mesh.positions).size());
-    for (std::size_t p = 0; p < scene.planes.size(); ++p) {
-      const PlaneCollider& plane = scene.planes[p].collider;
-      for (std::size_t v = 0; v < body.mesh.positions.size(); ++v) {
-        const double depth = -dot(body.mesh.positions[v] - plane.point, plane.normal);
-        if (depth > 1e-9 * size) {
-          std::ostringstream text;
-          text << body.source << ": body '" << body.name << "' starts inside [[plane]] #" << p + 1 << ": its vertex " << v
-               << " is " << depth << " m behind the plane; move the body (position) to the plane's open side";
-          throw Error(text.str());
-        }
-      }
-    }
-  }
-  for (const PlaneDesc& p : scene.planes) model.colliders.planes.push_back(p.collider);
-  for (const TriangleColliderDesc& t : scene.triangleColliders) model.colliders.meshes.push_back(t.collider);
-  // Impacts slower than a few steps' worth of gravity are resting contact, not bounces: a
-  // vertex on the ground gains |g| dt of speed per step and must not be launched back up.
-  const double dt = stepSize(scene);
-  model.colliders.restingSpeed = scene.restingSpeed >= 0.0 ? scene.restingSpeed : 4.0 * length(scene.gravity) * dt;
-  return model;
 }
 
 }  // namespace springy

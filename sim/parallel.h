@@ -45,6 +45,9 @@ class Elements {
   static Elements owned(const ElementRef* list, std::size_t count) { return Elements(list, 0, count); }
   static Elements owned(const std::vector<ElementRef>& list) { return owned(list.data(), list.size()); }
   std::size_t count() const { return end_ - begin_; }
+  // The list of a thread's share, or null for a range starting at first().
+  const ElementRef* list() const { return list_; }
+  std::size_t first() const { return begin_; }
 
   // Calls body(count, indexOf, maskOf) with the index and mask functions of this selection
   // (function objects the compiler inlines into the kernel's loop, one copy per kind).

@@ -68,7 +68,8 @@ int runCheck(const CheckOptions& options) {
     for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
       std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
     }
-    std::printf("], collide: %s, threads: %u\n", world.collides() ? "yes" : "no", world.threads());
+    std::printf("], collide: %s, contact between bodies: %s, threads: %u\n", world.collides() ? "yes" : "no",
+                world.bodyContacts() ? "yes" : "no", world.threads());
     // Sample at the render frame rate: the states a video would show are the ones checked.
     const double frame = 1.0 / scene.view.render.fps;
     const long frames = std::lround(scene.duration / frame);
@@ -116,6 +117,20 @@ int runCheck(const CheckOptions& options) {
                   static_cast<double>(st.newtonIterations) / steps, static_cast<double>(st.cgIterations) / steps,
                   static_cast<unsigned long long>(st.contactConstraints),
                   static_cast<unsigned long long>(st.halvedSteps), static_cast<unsigned long long>(st.unconvergedSteps));
+    }
+    if (const BodyContacts* contacts = world.bodyContacts()) {
+      const ContactStats& st = contacts->sinceStart();
+      const double steps = static_cast<double>(std::max<uint64_t>(st.steps, 1));
+      std::printf(
+          "  contact: %.2f contacts per step (at most %llu), %.2f impulses per step, %.2f test passes per "
+          "step, %llu vertex-steps stopped by the fail-safe; thickness",
+          static_cast<double>(st.contacts) / steps, static_cast<unsigned long long>(st.mostContacts),
+          static_cast<double>(st.impulses) / steps, static_cast<double>(st.passes) / steps,
+          static_cast<unsigned long long>(st.stopped));
+      for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
+        std::printf(" %s %.3g m%s", world.model().bodies[b].name.c_str(), contacts->thickness(b),
+                    b + 1 < world.model().bodies.size() ? "," : "\n");
+      }
     }
     if (!failure && options.endVolume > 0.0) {
       for (uint32_t b = 0; b < world.model().bodies.size() && !failure; ++b) {

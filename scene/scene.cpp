@@ -375,6 +375,11 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.strutDamping = r.optionalInRange("strut_damping", 0.0, kMaxConstant);
   b.hingeStiffness = r.optionalInRange("hinge_stiffness", 0.0, kMaxConstant);
   b.hingeDamping = r.optionalInRange("hinge_damping", 0.0, kMaxConstant);
+  // Contact with other bodies and within the body (sim/contact.h).
+  b.contact = r.boolean("contact", b.contact);
+  b.selfContact = r.boolean("self_contact", b.selfContact);
+  b.contactThickness = r.optionalInRange("contact_thickness", 1e-9, 1e3).value_or(0.0);
+  b.contactFriction = r.inRange("contact_friction", b.contactFriction, 0.0, 10.0);
   // Pins: vertex indices or rules ("top", "bottom", "left", "right", "front", "back": the
   // extreme vertex along y, x or z), and pin_near = [[x, y, z], ...]: the nearest vertex.
   // Each rule's vertex is found once however often it is named (a scan of every vertex per pin

@@ -142,6 +142,10 @@ void addBody(Model& model, const BodyDesc& desc) {
   info.mass = desc.mass;
   info.restVolume = signedVolume(mesh.positions, mesh.triangles);
   info.restSize = size;
+  info.contact = desc.contact;
+  info.selfContact = desc.selfContact;
+  info.contactThickness = desc.contactThickness;
+  info.contactFriction = desc.contactFriction;
   const uint32_t base = info.firstVertex;
 
   // Mass: angle-weighted area (docs/model.md §4, eq. A6) or uniform.

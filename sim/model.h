@@ -105,6 +105,12 @@ struct BodyDesc {
   std::optional<double> stretchPeriod, bendPeriod;  // P_stretch, P_bend [s]; bendPeriod 0: no hinges
   double deformationDecay = kDefaultDeformationDecay;  // [s]
   std::vector<uint32_t> pinned;  // body-local vertex indices held fixed in place
+  // Contact with other bodies (sim/contact.h) and within itself; the thickness [m] (0: a tenth
+  // of the mean edge length) and the Coulomb friction coefficient.
+  bool contact = true;
+  bool selfContact = false;
+  double contactThickness = 0.0;
+  double contactFriction = 0.3;
 };
 
 struct BodyInfo {
@@ -128,6 +134,9 @@ struct BodyInfo {
   // otherwise). [s], [N/m], [N m]
   double stretchPeriod = 0.0, bendPeriod = 0.0;
   double membraneModulus = 0.0, bendingModulus = 0.0;
+  // Contact (BodyDesc's): with other bodies, within itself; thickness (0: automatic) [m]; friction.
+  bool contact = true, selfContact = false;
+  double contactThickness = 0.0, contactFriction = 0.3;
   // The model's vertices are the mesh's in order along the body's longest side, so that
   // vertices near in space are near in memory and a contiguous index range is a slab of the
   // body (what one thread owns). modelVertex[k] is the global model index of the mesh's vertex

@@ -1,5 +1,7 @@
 #include "sim/monitor.h"
 
+#include "sim/intersections.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -61,10 +63,29 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
     r.lowestTotalTime = world.time();
     records_.push_back(r);
   }
+  if (world.bodyContacts() != nullptr) {
+    for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+      if (!model.bodies[b].contact) continue;
+      touching_.push_back(b);
+      touchingScale_ += records_[b].energyScale;
+      touchingLowest_ += records_[b].start.total();
+    }
+    if (touching_.size() < 2) touching_.clear();
+    touchingLowestTime_ = world.time();
+  }
 }
 
 std::optional<Failure> Monitor::check(const World& world) {
   const Model& model = world.model();
+  // First: a contact search that overflowed did not act, and the bodies' state explains why.
+  if (const BodyContacts* contacts = world.bodyContacts(); contacts && contacts->sinceStart().overflows > 0) {
+    const auto [a, b] = contacts->overflowPair();
+    std::ostringstream s;
+    s << "the contact search between it and " << (a == b ? "itself" : "body '" + model.bodies[b].name + "'")
+      << " found more than " << kMaxCandidatesPerPrimitive
+      << " candidate pairs per primitive (bodies that have blown up, or start inside each other)";
+    return Failure{a, world.stepCount(), world.time(), describe(world, a, s.str(), stepAdvice(model.bodies[a]))};
+  }
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     BodyRecord& r = records_[b];
     const BodyInfo& info = model.bodies[b];
@@ -82,8 +103,9 @@ std::optional<Failure> Monitor::check(const World& world) {
     // Nothing injects energy, so the total may only fall: a rise above the lowest total so far
     // (not only above the start: a body that has lost most of its energy and gains it back at
     // rest is as wrong) is an instability.
+    const bool touching = std::binary_search(touching_.begin(), touching_.end(), b);
     const double reference = limits_.energyFromLowest ? r.lowestTotal : r.start.total();
-    if (checkEnergy_ && m.total() - reference > limits_.energyTolerance * r.energyScale) {
+    if (checkEnergy_ && !touching && m.total() - reference > limits_.energyTolerance * r.energyScale) {
       std::ostringstream s;
       s << "its total energy rose from " << reference << " J";
       if (limits_.energyFromLowest) s << " (its lowest, at t = " << r.lowestTotalTime << " s)";
@@ -114,6 +136,55 @@ std::optional<Failure> Monitor::check(const World& world) {
                                    "strut_period, or the body material (scenes/README.md), which means the same at "
                                    "every resolution.");
       }
+    }
+  }
+  if (checkEnergy_ && !touching_.empty()) {
+    // The bodies in contact together: the one whose own energy rose most above its lowest is
+    // named (energy passes from body to body, but the sum may only fall).
+    double total = 0.0, start = 0.0, rise = -INFINITY;
+    uint32_t named = touching_[0];
+    for (uint32_t b : touching_) {
+      total += records_[b].last.total();
+      start += records_[b].start.total();
+      if (records_[b].last.total() - records_[b].lowestTotal > rise) {
+        rise = records_[b].last.total() - records_[b].lowestTotal;
+        named = b;
+      }
+    }
+    const double reference = limits_.energyFromLowest ? touchingLowest_ : start;
+    if (total - reference > limits_.energyTolerance * touchingScale_) {
+      std::ostringstream s;
+      s << "the total energy of the bodies in contact (";
+      for (std::size_t k = 0; k < touching_.size(); ++k)
+        s << (k ? ", " : "") << "'" << model.bodies[touching_[k]].name << "'";
+      s << ") rose from " << reference << " J";
+      if (limits_.energyFromLowest) s << " (its lowest, at t = " << touchingLowestTime_ << " s)";
+      s << " to " << total
+        << " J although nothing injects energy (the integration or the contact is unstable or too coarse)";
+      return Failure{named, world.stepCount(), world.time(),
+                     describe(world, named, s.str(), stepAdvice(model.bodies[named]))};
+    }
+    if (total < touchingLowest_) touchingLowest_ = total, touchingLowestTime_ = world.time();
+  }
+  // Bodies crossing each other or themselves: whatever the contact stage did, never a silent
+  // pass-through (sim/intersections.h).
+  if (world.bodyContacts() != nullptr) {
+    const std::vector<Intersection> crossing = findIntersections(model, world.positions(), 1);
+    if (!crossing.empty()) {
+      const Intersection& c = crossing[0];
+      const BodyInfo &a = model.bodies[c.bodyA], &b = model.bodies[c.bodyB];
+      std::ostringstream s;
+      if (c.bodyA == c.bodyB) {
+        s << "it passes through itself: its faces " << c.faceA - a.firstFace << " and " << c.faceB - a.firstFace;
+      } else {
+        s << "it passes through body '" << b.name << "': its face " << c.faceA - a.firstFace << " and face "
+          << c.faceB - b.firstFace << " of '" << b.name << "'";
+      }
+      s << " cross at (" << c.point.x << ", " << c.point.y << ", " << c.point.z << ")";
+      return Failure{c.bodyA, world.stepCount(), world.time(),
+                     describe(world, c.bodyA, s.str(),
+                              "The contact let it through: try a smaller dt or more substeps (--substeps), or a larger "
+                              "contact_thickness; if dt is sane, please report the scene.")};
     }
   }
   return std::nullopt;

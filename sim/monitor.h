@@ -76,6 +76,10 @@ class Monitor {
   MonitorLimits limits_;
   bool checkEnergy_;
   std::vector<BodyRecord> records_;
+  // Bodies that touch each other (sim/contact.h) pass energy between them: their energy is
+  // checked as one sum, which nothing may raise.
+  std::vector<uint32_t> touching_;
+  double touchingScale_ = 0.0, touchingLowest_ = 0.0, touchingLowestTime_ = 0.0;
 };
 
 }  // namespace springy

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "sim/error.h"
+#include "sim/intersections.h"
 #include "sim/mesh.h"
 
 namespace springy {
@@ -52,6 +53,26 @@ Model buildModel(const SimulationDesc& scene) {
         }
       }
     }
+  }
+  // Bodies that take part in contact and start crossing each other (or themselves, with self
+  // contact) cannot be sorted out by the contact stage, which keeps things from crossing but
+  // does not uncross them: say which instead.
+  const std::vector<Intersection> crossing = findIntersections(model, model.restPosition, 1);
+  if (!crossing.empty()) {
+    const Intersection& c = crossing[0];
+    const BodyInfo &a = model.bodies[c.bodyA], &b = model.bodies[c.bodyB];
+    const BodyDesc& desc = scene.bodies[c.bodyA];
+    std::ostringstream text;
+    text << (desc.source.empty() ? scene.path : desc.source) << ": body '" << a.name << "' starts ";
+    if (c.bodyA == c.bodyB) {
+      text << "crossing itself (self_contact): its faces " << c.faceA - a.firstFace << " and " << c.faceB - a.firstFace;
+    } else {
+      text << "crossing body '" << b.name << "': its face " << c.faceA - a.firstFace << " and face "
+           << c.faceB - b.firstFace << " of '" << b.name << "'";
+    }
+    text << " cross at (" << c.point.x << ", " << c.point.y << ", " << c.point.z << "); move the bodies apart"
+         << (c.bodyA == c.bodyB ? ", or set self_contact = false" : ", or set contact = false on one of them");
+    throw Error(text.str());
   }
   model.colliders.planes = scene.planes;
   model.colliders.meshes = scene.triangleColliders;

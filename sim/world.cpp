@@ -55,6 +55,7 @@ World::World(Model model, Integrator integrator, double dt)
   }
   dampingLayers_ = model_->colliders.dampingLayers();
   forces_ = std::make_unique<Forces>(*model_);
+  if (BodyContacts::needed(*model_)) contacts_ = std::make_unique<BodyContacts>(*model_);
 
   const std::size_t n = model_->vertexCount();
   x_ = model_->restPosition;
@@ -91,7 +92,7 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
 void World::step() {
   // Contacts need the positions at the start of the step (xOld). The integrators that change
   // x only in their last pass save it there (lastPass); the others save it now.
-  if (!model_->colliders.empty() && !savesOldInLastPass()) {
+  if (keepsOld() && !savesOldInLastPass()) {
     Vec3 *x = x_.data(), *xOld = xOld_.data();
     forVertices([&](std::size_t begin, std::size_t end) { std::copy(x + begin, x + end, xOld + begin); });
   }
@@ -104,6 +105,8 @@ void World::step() {
     case Integrator::RK4: stepRK4(); break;
     case Integrator::BackwardEuler: stepBackwardEuler(); break;
   }
+  // Contact between and within bodies, over the whole step's paths.
+  if (contacts_ && contacts_->resolve(xOld_, x_, v_, dt_)) cachedAccelerationValid_ = false;
   time_ += dt_;
   ++steps_;
 }
@@ -204,7 +207,7 @@ void World::stepRK4() {
 
 void World::stepBackwardEuler() {
   implicit_->step(*forces_, x_, v_, time_, dt_);
-  if (!model_->colliders.empty()) lastPass([](std::size_t) {});
+  if (!model_->colliders.empty()) lastPass([](std::size_t) {});  // the static colliders' pass
 }
 
 bool World::savesOldInLastPass() const {
@@ -216,11 +219,11 @@ template <class Update>
 void World::lastPass(Update&& update) {
   // One fork-join: each thread saves, updates and resolves the contacts of its own vertices
   // (a vertex's contact reads only its own old and new state).
-  const bool contacts = !model_->colliders.empty(), saveOld = savesOldInLastPass();
+  const bool contacts = !model_->colliders.empty(), saveOld = keepsOld() && savesOldInLastPass();
   std::atomic<bool> touched{false};
   Vec3 *x = x_.data(), *xOld = xOld_.data();
   forVertices([&](std::size_t begin, std::size_t end) {
-    if (contacts && saveOld) std::copy(x + begin, x + end, xOld + begin);
+    if (saveOld) std::copy(x + begin, x + end, xOld + begin);
     for (std::size_t i = begin; i < end; ++i) update(i);
     if (contacts && collide(begin, end)) touched.store(true, std::memory_order_relaxed);
   });

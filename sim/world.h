@@ -6,6 +6,8 @@
 //   integrate: one function per integrator advances positions and velocities by dt
 //   collide:   [static colliders] [damping layers] (continuous, earliest hit wins), in the
 //              integrator's last pass over the vertices (lastPass: one fork-join for both)
+//   contact:   [bodies] between bodies and within a body (sim/contact.h), over the whole step's
+//              paths, when two bodies or a self-contact body are in the scene
 // A stage is in the list only if the scene uses it: no wind stage without wind, no hinge stage
 // for the legacy all-pairs model, no collision pass without colliders. An unused feature costs
 // nothing per step.
@@ -24,6 +26,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/contact.h"
 #include "sim/force_stages.h"
 #include "sim/model.h"
 
@@ -94,6 +97,9 @@ class World {
   bool collides() const { return !model_->colliders.empty(); }
   // The backward Euler solver (its statistics), or null for the explicit integrators.
   const ImplicitSolver* implicitSolver() const { return implicit_.get(); }
+  // The contact stage between and within bodies, or null when the scene needs none.
+  const BodyContacts* bodyContacts() const { return contacts_.get(); }
+  BodyContacts* bodyContacts() { return contacts_.get(); }
 
   // Replaces the state (e.g. a test's initial condition). Sizes must match the model.
   void setState(std::vector<Vec3> x, std::vector<Vec3> v, double time = 0.0);
@@ -109,6 +115,9 @@ class World {
   template <class Update>
   void lastPass(Update&& update);
   bool savesOldInLastPass() const;
+  // Whether the step keeps the positions at its start (xOld): for the static colliders' and the
+  // bodies' contacts.
+  bool keepsOld() const { return !model_->colliders.empty() || contacts_ != nullptr; }
   // Resolves the contacts of vertices [begin, end) along their paths xOld -> x; true if any
   // vertex touched a collider or a damping layer.
   bool collide(std::size_t begin, std::size_t end);
@@ -133,6 +142,7 @@ class World {
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
   std::unique_ptr<Forces> forces_;          // the force stages, their scratch and the threads
+  std::unique_ptr<BodyContacts> contacts_;  // null: no contact between or within bodies
 };
 
 }  // namespace springy

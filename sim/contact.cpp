@@ -1,0 +1,412 @@
+#include "sim/contact.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace springy {
+namespace {
+
+// A pair already closer than its thickness is pushed apart at this fraction of the overlap per
+// step (Bridson et al. 2002 §7.2 use 0.1 for their repulsion): enough to restore the gap in a
+// few steps, too little to launch anything.
+constexpr double kSeparationRate = 0.1;
+
+bool sharesVertex(const std::array<uint32_t, 2>& e, const std::array<uint32_t, 2>& f) {
+  return e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1];
+}
+
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+}  // namespace
+
+bool BodyContacts::needed(const Model& model) {
+  uint32_t taking = 0;
+  for (const BodyInfo& b : model.bodies) {
+    if (b.selfContact) return true;
+    if (b.contact) ++taking;
+  }
+  return taking >= 2;
+}
+
+BodyContacts::BodyContacts(const Model& model) : model_(&model) {
+  const std::size_t n = model.vertexCount();
+  u_.assign(n, Vec3{});
+  u0_.assign(n, Vec3{});
+  changed_.assign(n, 0);
+  stopped_.assign(n, 0);
+  group_.resize(n);
+  bodies_.resize(model.bodies.size());
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    const BodyInfo& info = model.bodies[b];
+    Body& body = bodies_[b];
+    if (!info.contact && !info.selfContact) continue;
+    active_.push_back(b);
+    body.self = info.selfContact;
+    body.friction = info.contactFriction;
+    // The edges, each once, from the faces.
+    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
+      const Triangle& t = model.faces[f];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t i = t[static_cast<std::size_t>(k)], j = t[static_cast<std::size_t>((k + 1) % 3)];
+        body.edges.push_back({std::min(i, j), std::max(i, j)});
+      }
+    }
+    std::sort(body.edges.begin(), body.edges.end());
+    body.edges.erase(std::unique(body.edges.begin(), body.edges.end()), body.edges.end());
+    double sum = 0.0;
+    for (const auto& e : body.edges) sum += length(model.restPosition[e[1]] - model.restPosition[e[0]]);
+    body.thickness = info.contactThickness > 0.0 ? info.contactThickness
+                                                 : kDefaultThicknessFactor * sum /
+                                                       static_cast<double>(std::max<std::size_t>(1, body.edges.size()));
+  }
+  double primitives = 0.0;
+  for (uint32_t b : active_) {
+    primitives +=
+        model.bodies[b].vertexCount + model.bodies[b].faceCount + static_cast<double>(bodies_[b].edges.size());
+  }
+  maxCandidates_ = kMaxCandidatesPerPrimitive * primitives;
+  // Trees over the rest shape (paths that stand still).
+  updateTrees(model.restPosition, 1.0);
+  // Self pairs closer than 2 h at rest are not contacts (a mesh may start with parts that nearly
+  // touch): found once with boxes grown to h each, then measured.
+  for (uint32_t b : active_) {
+    Body& body = bodies_[b];
+    if (!body.self) continue;
+    const BodyInfo& info = model.bodies[b];
+    const std::vector<Vec3>& x = model.restPosition;
+    const double h = body.thickness;
+    std::vector<Box> vertexBoxes, faceBoxes, edgeBoxes;
+    for (uint32_t i = 0; i < info.vertexCount; ++i)
+      vertexBoxes.push_back(sweptBox({x[info.firstVertex + i], x[info.firstVertex + i]}, h));
+    for (uint32_t f = 0; f < info.faceCount; ++f) {
+      const Triangle& t = model.faces[info.firstFace + f];
+      faceBoxes.push_back(sweptBox({x[t[0]], x[t[0]]}, {x[t[1]], x[t[1]]}, {x[t[2]], x[t[2]]}, h));
+    }
+    for (const auto& e : body.edges) edgeBoxes.push_back(sweptBox({x[e[0]], x[e[0]]}, {x[e[1]], x[e[1]]}, h));
+    Bvh vt, ft, et;
+    vt.build(vertexBoxes), ft.build(faceBoxes), et.build(edgeBoxes);
+    std::vector<PrimitivePair> pairs;
+    overlapPairs(
+        vt, ft,
+        [&](uint32_t v, uint32_t f) {
+          const Triangle& t = model.faces[info.firstFace + f];
+          const uint32_t i = info.firstVertex + v;
+          return t[0] == i || t[1] == i || t[2] == i;
+        },
+        pairs);
+    for (const PrimitivePair& p : pairs) {
+      const Triangle& t = model.faces[info.firstFace + p.b];
+      const PointTriangleClosest c = closestPointTriangle(x[info.firstVertex + p.a], x[t[0]], x[t[1]], x[t[2]]);
+      if (c.distanceSquared < 4.0 * h * h) body.restVertexFace.push_back(p);
+    }
+    pairs.clear();
+    selfOverlapPairs(
+        et, [&](uint32_t e, uint32_t f) { return sharesVertex(body.edges[e], body.edges[f]); }, pairs);
+    for (const PrimitivePair& p : pairs) {
+      const auto &e = body.edges[p.a], &f = body.edges[p.b];
+      const SegmentSegmentClosest c = closestSegmentSegment(x[e[0]], x[e[1]], x[f[0]], x[f[1]]);
+      if (c.distanceSquared < 4.0 * h * h) body.restEdgeEdge.push_back(p);
+    }
+  }
+}
+
+void BodyContacts::updateTrees(const std::vector<Vec3>& x0, double dt) {
+  for (uint32_t b : active_) updateTree(b, x0, dt);
+}
+
+void BodyContacts::updateTree(uint32_t b, const std::vector<Vec3>& x0, double dt) {
+  const Model& model = *model_;
+  const auto motion = [&](uint32_t i) { return Motion{x0[i], x0[i] + u_[i] * dt}; };
+  {
+    Body& body = bodies_[b];
+    const BodyInfo& info = model.bodies[b];
+    const double margin = 0.5 * body.thickness;
+    const auto update = [&](Bvh& tree) {
+      if (tree.primitiveCount() == 0) {
+        tree.build(boxes_);
+      } else {
+        tree.refit(boxes_);
+        if (tree.needsRebuild()) tree.rebuild();
+      }
+    };
+    boxes_.clear();
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      boxes_.push_back(sweptBox(motion(i), margin));
+    }
+    update(body.vertexTree);
+    boxes_.clear();
+    for (const auto& e : body.edges) boxes_.push_back(sweptBox(motion(e[0]), motion(e[1]), margin));
+    update(body.edgeTree);
+    boxes_.clear();
+    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
+      const Triangle& t = model.faces[f];
+      boxes_.push_back(sweptBox(motion(t[0]), motion(t[1]), motion(t[2]), margin));
+    }
+    update(body.faceTree);
+  }
+}
+
+bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>& x0, double dt,
+                                std::vector<Contact>& out, uint64_t& candidates) {
+  const Model& model = *model_;
+  const Body &A = bodies_[a], &B = bodies_[b];
+  const bool self = a == b;
+  const double h = 0.5 * (A.thickness + B.thickness);
+  const double mu = std::max(A.friction, B.friction) > 0.0 ? std::sqrt(A.friction * B.friction) : 0.0;
+  const auto motion = [&](uint32_t i) { return Motion{x0[i], x0[i] + u_[i] * dt}; };
+  // Vertices of `vb` against faces of `fb`.
+  const auto vertexFace = [&](uint32_t vb, uint32_t fb) {
+    const Body &V = bodies_[vb], &F = bodies_[fb];
+    const BodyInfo &vi = model.bodies[vb], &fi = model.bodies[fb];
+    pairs_.clear();
+    if (self) {
+      overlapPairs(
+          V.vertexTree, F.faceTree,
+          [&](uint32_t v, uint32_t f) {
+            const Triangle& t = model.faces[fi.firstFace + f];
+            const uint32_t i = vi.firstVertex + v;
+            return t[0] == i || t[1] == i || t[2] == i ||
+                   std::binary_search(V.restVertexFace.begin(), V.restVertexFace.end(), PrimitivePair{v, f});
+          },
+          pairs_);
+    } else {
+      overlapPairs(V.vertexTree, F.faceTree, pairs_);
+    }
+    candidates += pairs_.size();
+    if (static_cast<double>(candidates) > maxCandidates_) return false;
+    for (const PrimitivePair& p : pairs_) {
+      const uint32_t i = vi.firstVertex + p.a;
+      const Triangle& t = model.faces[fi.firstFace + p.b];
+      VertexTriangleContact c;
+      if (!vertexTriangleImpact(motion(i), motion(t[0]), motion(t[1]), motion(t[2]), h, c)) continue;
+      out.push_back(
+          {{i, t[0], t[1], t[2]}, {1.0, -c.weight[0], -c.weight[1], -c.weight[2]}, c.normal, c.distance, h, mu});
+    }
+    return true;
+  };
+  if (!vertexFace(a, b)) return false;
+  if (!self && !vertexFace(b, a)) return false;
+  // Edges against edges.
+  pairs_.clear();
+  if (self) {
+    selfOverlapPairs(
+        A.edgeTree,
+        [&](uint32_t e, uint32_t f) {
+          return sharesVertex(A.edges[e], A.edges[f]) ||
+                 std::binary_search(A.restEdgeEdge.begin(), A.restEdgeEdge.end(), PrimitivePair{e, f});
+        },
+        pairs_);
+  } else {
+    overlapPairs(A.edgeTree, B.edgeTree, pairs_);
+  }
+  candidates += pairs_.size();
+  if (static_cast<double>(candidates) > maxCandidates_) return false;
+  for (const PrimitivePair& p : pairs_) {
+    const auto &e = A.edges[p.a], &f = B.edges[p.b];
+    EdgeEdgeContact c;
+    if (!edgeEdgeImpact(motion(e[0]), motion(e[1]), motion(f[0]), motion(f[1]), h, c)) continue;
+    out.push_back({{e[0], e[1], f[0], f[1]}, {1.0 - c.a, c.a, -(1.0 - c.b), -c.b}, c.normal, c.distance, h, mu});
+  }
+  return true;
+}
+
+bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* counted) {
+  uint64_t candidates = 0;
+  const Model& model = *model_;
+  out.clear();
+  // Each body's swept box first (one pass over its vertices): the trees of a body that is near
+  // no other and has no self contact are not needed this pass.
+  for (uint32_t b : active_) {
+    const BodyInfo& info = model.bodies[b];
+    Box box{x0[info.firstVertex], x0[info.firstVertex]};
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      box = merged(box, sweptBox(Motion{x0[i], x0[i] + u_[i] * dt}, 0.5 * bodies_[b].thickness));
+    }
+    bodies_[b].box = box;
+    bodies_[b].near = bodies_[b].self;
+  }
+  for (std::size_t k = 0; k < active_.size(); ++k) {
+    for (std::size_t l = k + 1; l < active_.size(); ++l) {
+      Body &A = bodies_[active_[k]], &B = bodies_[active_[l]];
+      if (model.bodies[active_[k]].contact && model.bodies[active_[l]].contact && overlaps(A.box, B.box)) {
+        A.near = B.near = true;
+      }
+    }
+  }
+  for (uint32_t b : active_) {
+    if (bodies_[b].near) updateTree(b, x0, dt);
+  }
+  bool ok = true;
+  for (std::size_t k = 0; ok && k < active_.size(); ++k) {
+    const uint32_t a = active_[k];
+    if (bodies_[a].self) ok = pairContacts(a, a, x0, dt, out, candidates);
+    for (std::size_t l = k + 1; ok && model.bodies[a].contact && l < active_.size(); ++l) {
+      const uint32_t b = active_[l];
+      if (model.bodies[b].contact && overlaps(bodies_[a].box, bodies_[b].box)) {
+        ok = pairContacts(a, b, x0, dt, out, candidates);
+        if (!ok) overflowPair_ = {a, b};
+      }
+    }
+    if (!ok && overflowPair_[0] != a) overflowPair_ = {a, a};
+  }
+  if (counted) *counted += candidates;
+  return ok;
+}
+
+bool BodyContacts::overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
+  // The impulses applied so far are kept (each is equal and opposite); the search is abandoned.
+  ++last_.overflows;
+  const Model& model = *model_;
+  bool changed = false;
+  for (uint32_t b : active_) {
+    const BodyInfo& info = model.bodies[b];
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      if (!changed_[i]) continue;
+      x1[i] = x0[i] + u_[i] * dt;
+      v1[i] += u_[i] - u0_[i];
+      changed = true;
+    }
+  }
+  return changed;
+}
+
+double BodyContacts::normalSpeed(const Contact& c) const {
+  double s = 0.0;
+  for (int k = 0; k < 4; ++k) s += c.weight[k] * dot(u_[c.vertex[k]], c.normal);
+  return s;
+}
+
+bool BodyContacts::impulse(const Contact& c, double dt) {
+  const Model& model = *model_;
+  const double target = c.distance < c.thickness ? kSeparationRate * (c.thickness - c.distance) / dt : 0.0;
+  const double vn = normalSpeed(c);
+  if (!(vn < target)) return false;
+  double inverseMass = 0.0;  // of the contact point along the normal: sum w_k^2 / m_k
+  Vec3 relative;
+  for (int k = 0; k < 4; ++k) {
+    inverseMass += c.weight[k] * c.weight[k] * model.invMass[c.vertex[k]];
+    relative += u_[c.vertex[k]] * c.weight[k];
+  }
+  if (!(inverseMass > 0.0)) return false;  // every corner pinned
+  const double j = (target - vn) / inverseMass;
+  Vec3 change = c.normal * j;
+  // Coulomb friction: at most mu j off the relative tangential speed (which it may stop, not reverse).
+  const Vec3 tangential = relative - c.normal * dot(relative, c.normal);
+  const double slip = length(tangential);
+  if (c.friction > 0.0 && slip > 0.0) change -= tangential * (std::min(c.friction * j, slip / inverseMass) / slip);
+  for (int k = 0; k < 4; ++k) {
+    const uint32_t i = c.vertex[k];
+    if (model.invMass[i] == 0.0 || c.weight[k] == 0.0) continue;
+    u_[i] += change * (c.weight[k] * model.invMass[i]);
+    changed_[i] = 1;
+  }
+  return true;
+}
+
+bool BodyContacts::resolve(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
+  const bool changed = resolveStep(x0, x1, v1, dt);
+  last_.steps = 1;
+  last_.mostContacts = last_.contacts;
+  total_.add(last_);
+  return changed;
+}
+
+bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
+  const Model& model = *model_;
+  last_ = ContactStats{};
+  bool finite = true;
+  for (uint32_t b : active_) {
+    const BodyInfo& info = model.bodies[b];
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      u_[i] = u0_[i] = (x1[i] - x0[i]) / dt;
+      changed_[i] = 0;
+      stopped_[i] = 0;
+      finite = finite && std::isfinite(x0[i].x + x0[i].y + x0[i].z + u_[i].x + u_[i].y + u_[i].z);
+    }
+  }
+  // A state that is no longer finite has blown up: there is no contact to resolve, and the
+  // monitor (sim/monitor.h) stops the run at its next check.
+  if (!finite) return false;
+  // 1. Impulses, pass after pass, until no contact needs one.
+  bool any = false;
+  for (int pass = 0; pass < impulsePasses_; ++pass) {
+    if (!findContacts(x0, dt, contacts_, pass == 0 ? &last_.candidates : nullptr)) return overflow(x0, x1, v1, dt);
+    ++last_.passes;
+    if (pass == 0) last_.contacts = contacts_.size();
+    bool applied = false;
+    for (const Contact& c : contacts_) {
+      if (impulse(c, dt)) {
+        applied = true;
+        ++last_.impulses;
+      }
+    }
+    any = any || applied;
+    if (!applied) break;
+  }
+  if (!any && impulsePasses_ > 0) return false;
+  // 2. Fail-safe: stop every vertex still in an approaching contact, until none is left.
+  const auto approaching = [&](const Contact& c) { return normalSpeed(c) < -1e-9 * c.thickness / dt; };
+  bool stoppedAny = false;
+  for (;;) {
+    if (!findContacts(x0, dt, contacts_, nullptr)) return overflow(x0, x1, v1, dt);
+    ++last_.passes;
+    bool stoppedNow = false;
+    for (const Contact& c : contacts_) {
+      if (!approaching(c)) continue;
+      for (uint32_t i : c.vertex) {
+        if (model.invMass[i] == 0.0 || stopped_[i]) continue;
+        if (!stoppedAny) std::iota(group_.begin(), group_.end(), 0u);
+        v1[i] += u_[i] - u0_[i];  // the impulses it took so far, whose other halves stay applied
+        stopped_[i] = 1;
+        changed_[i] = 1;
+        u_[i] = Vec3{};
+        stoppedAny = stoppedNow = true;
+        ++last_.stopped;
+      }
+      // The contact's stopped vertices form one group.
+      uint32_t first = UINT32_MAX;
+      for (uint32_t i : c.vertex) {
+        if (!stopped_[i]) continue;
+        if (first == UINT32_MAX)
+          first = i;
+        else
+          group_[findRoot(group_, i)] = findRoot(group_, first);
+      }
+    }
+    if (!stoppedNow) break;
+  }
+  // 3. New positions and end velocities.
+  for (uint32_t b : active_) {
+    const BodyInfo& info = model.bodies[b];
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      if (!changed_[i] || stopped_[i]) continue;
+      x1[i] = x0[i] + u_[i] * dt;
+      v1[i] += u_[i] - u0_[i];
+    }
+  }
+  if (stoppedAny) {
+    // Each group of stopped vertices keeps its momentum: they all take its mass-weighted mean
+    // end velocity (the integrator's, plus the impulses taken before stopping). Sums in vertex
+    // order, per group root.
+    std::vector<Vec3> momentum(model.vertexCount());
+    std::vector<double> mass(model.vertexCount(), 0.0);
+    for (uint32_t i = 0; i < model.vertexCount(); ++i) {
+      if (!stopped_[i]) continue;
+      const uint32_t r = findRoot(group_, i);
+      momentum[r] += v1[i] * model.mass[i];
+      mass[r] += model.mass[i];
+    }
+    for (uint32_t i = 0; i < model.vertexCount(); ++i) {
+      if (!stopped_[i]) continue;
+      x1[i] = x0[i];
+      v1[i] = momentum[findRoot(group_, i)] / mass[findRoot(group_, i)];
+    }
+  }
+  return true;
+}
+
+}  // namespace springy

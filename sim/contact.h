@@ -1,0 +1,150 @@
+// springy: contact between bodies and within a body (docs/model.md §17).
+//
+// After the integrator has moved every vertex from x0 (the start of the step) to x1, and the
+// static colliders have had their say, this stage makes sure that no vertex passes through a
+// triangle and no edge through an edge, of another body or (with self contact) of the same
+// body. Each body has a thickness h (default kDefaultThicknessFactor times its mean edge length);
+// two primitives are in contact when they come within h of each other along the step's
+// straight-line paths (sim/contact_geometry.h: continuous, earliest contact, never missed).
+//
+// The response works on the paths' average velocities u = (x1 - x0) / dt, as Bridson, Fedkiw &
+// Anderson 2002 ("Robust treatment of collisions, contact and friction for cloth animation",
+// §6-7) do:
+//  1. Impulses. Every contact found is given, in a fixed order, the inelastic impulse that stops
+//     the primitives approaching each other at the contact point (relative normal speed 0, or a
+//     small separating speed when they are already closer than h), shared among the corners by
+//     their barycentric weights over their masses (Bridson et al. §7.1, the weights w_k /
+//     sum w_k^2 / m_k); Coulomb friction takes up to mu times that impulse off the relative
+//     tangential speed. Then the paths are tested again, up to kImpulsePasses times.
+//  2. Fail-safe. Vertices still in an approaching contact after that stop for this step (their
+//     paths end where they started, which was free of contact): the candidates are tested again
+//     until no approaching contact is left. This always ends (at worst every vertex of the
+//     contacts stops) and it is what guarantees that nothing crosses. The stopped vertices of
+//     each group that touched (a union of contacts) share the group's mass-weighted mean velocity,
+//     so that momentum is kept (the rigid impact zones of Provot 1997 and Harmon et al. 2008,
+//     "Robust treatment of simultaneous collisions", without their rotation).
+//  3. The new paths give the positions x1 = x0 + dt u, and each vertex's velocity at the end of
+//     the step changes by the same amount as its average velocity did.
+// Momentum is kept by every impulse (equal and opposite over the two primitives); kinetic energy
+// never rises (an impulse stops or slows an approach; friction only takes tangential speed).
+//
+// Neighbours in the mesh are never tested against each other: a vertex and the faces it is a
+// corner of, two edges that share a vertex; neither are pairs of a body that are closer than
+// 2 h at rest (a mesh may have nearly touching parts from the start).
+//
+// Deterministic: the pairs are collected in sorted order and resolved one after another on one
+// thread, so the result is the same bits on any thread count.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "sim/contact_bvh.h"
+#include "sim/model.h"
+
+namespace springy {
+
+// Thickness of a body from its mean edge length, when the scene does not give it.
+constexpr double kDefaultThicknessFactor = 0.1;
+// Passes of impulses before the fail-safe.
+constexpr int kImpulsePasses = 8;
+// Candidate pairs per primitive (vertex, edge, face of the bodies that take part) beyond which a
+// step's search is abandoned as an overflow: far more than any real contact has (a few per
+// primitive), reached only when bodies have blown up or start packed inside each other, where
+// testing them all would cost time quadratic in their size. An overflow is reported (the
+// monitor stops the run), never passed over silently.
+constexpr double kMaxCandidatesPerPrimitive = 64.0;
+
+// What the contact stage did in one step (and summed over a run by the caller).
+struct ContactStats {
+  uint64_t candidates = 0;    // pairs whose swept boxes overlapped (first pass)
+  uint64_t contacts = 0;      // contacts found (first pass)
+  uint64_t impulses = 0;      // impulses applied over all passes
+  uint64_t passes = 0;        // passes of tests
+  uint64_t stopped = 0;       // vertices the fail-safe stopped
+  uint64_t steps = 0;         // steps (1 for one step)
+  uint64_t mostContacts = 0;  // the most contacts in one step
+  uint64_t overflows = 0;     // steps whose search was abandoned (kMaxCandidatesPerPrimitive)
+  void add(const ContactStats& o) {
+    candidates += o.candidates, contacts += o.contacts, impulses += o.impulses, passes += o.passes;
+    stopped += o.stopped, steps += o.steps, mostContacts = std::max(mostContacts, o.mostContacts);
+    overflows += o.overflows;
+  }
+};
+
+class BodyContacts {
+ public:
+  // Whether a model needs this stage: two or more bodies with contact, or a body with self
+  // contact.
+  static bool needed(const Model& model);
+  // Reads `model` (which must outlive this object and not move).
+  explicit BodyContacts(const Model& model);
+
+  // Resolves the contacts of the step from x0 to x1 of length dt: corrects x1 and v1 in place.
+  // Returns whether anything changed.
+  bool resolve(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
+
+  const ContactStats& lastStep() const { return last_; }
+  const ContactStats& sinceStart() const { return total_; }
+  // Passes of impulses before the fail-safe (kImpulsePasses; 0 leaves everything to the
+  // fail-safe, which tests use to exercise it alone).
+  void setImpulsePasses(int passes) { impulsePasses_ = passes; }
+  double thickness(uint32_t body) const { return bodies_[body].thickness; }
+  // The bodies whose search overflowed last (sinceStart().overflows > 0).
+  std::array<uint32_t, 2> overflowPair() const { return overflowPair_; }
+
+ private:
+  // A contact found on the current paths: the vertices (up to 4), their weights in the relative
+  // position (vertex-triangle: 1, -w0, -w1, -w2; edge-edge: 1 - a, a, -(1 - b), -b), the normal
+  // and the distance at the contact.
+  struct Contact {
+    uint32_t vertex[4];
+    double weight[4];
+    Vec3 normal;
+    double distance;
+    double thickness;
+    double friction;
+  };
+  struct Body {
+    double thickness = 0.0;
+    double friction = 0.0;
+    bool self = false;
+    std::vector<std::array<uint32_t, 2>> edges;  // global vertex indices, each edge once, sorted
+    Bvh vertexTree, edgeTree, faceTree;
+    Box box;            // the swept box of the whole body this pass
+    bool near = false;  // near another body this pass, or self contact: its trees are refitted
+    std::vector<PrimitivePair> restVertexFace, restEdgeEdge;  // self pairs near at rest (sorted)
+  };
+  // Ends a step whose search overflowed: keeps the impulses applied so far, counts it.
+  bool overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
+  bool resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
+  // Swept boxes of every primitive on the paths x0 -> x0 + dt u, and the trees refitted over them.
+  void updateTrees(const std::vector<Vec3>& x0, double dt);
+  void updateTree(uint32_t body, const std::vector<Vec3>& x0, double dt);
+  // Every contact on the current paths, in a fixed order; false on an overflow (out incomplete).
+  bool findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* candidates);
+  bool pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out,
+                    uint64_t& candidates);
+  // The contact's relative normal speed on the current paths.
+  double normalSpeed(const Contact& c) const;
+  // Applies the contact's impulse to u; true if one was needed.
+  bool impulse(const Contact& c, double dt);
+
+  const Model* model_;
+  std::vector<Body> bodies_;
+  std::vector<uint32_t> active_;  // bodies that take part, in order
+  std::vector<Vec3> u_, u0_;      // per vertex: the path's average velocity, now and as integrated
+  std::vector<uint8_t> changed_, stopped_;
+  std::vector<Box> boxes_;
+  std::vector<PrimitivePair> pairs_;
+  std::vector<Contact> contacts_;
+  std::vector<uint32_t> group_;  // union-find over the stopped vertices
+  ContactStats last_, total_;
+  int impulsePasses_ = kImpulsePasses;
+  double maxCandidates_ = 0.0;
+  std::array<uint32_t, 2> overflowPair_{0, 0};  // per search: kMaxCandidatesPerPrimitive x the primitives
+};
+
+}  // namespace springy

@@ -71,8 +71,8 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   maxCandidates_ = kMaxCandidatesPerPrimitive * primitives;
   // Trees over the rest shape (paths that stand still).
   updateTrees(model.restPosition, 1.0);
-  // Self pairs closer than 2 h at rest are not contacts (a mesh may start with parts that nearly
-  // touch): found once with boxes grown to h each, then measured.
+  // Self pairs closer than h at rest are not contacts (a mesh may start with parts that nearly
+  // touch): found once with boxes grown by h, then measured.
   for (uint32_t b : active_) {
     Body& body = bodies_[b];
     if (!body.self) continue;
@@ -101,7 +101,7 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
     for (const PrimitivePair& p : pairs) {
       const Triangle& t = model.faces[info.firstFace + p.b];
       const PointTriangleClosest c = closestPointTriangle(x[info.firstVertex + p.a], x[t[0]], x[t[1]], x[t[2]]);
-      if (c.distanceSquared < 4.0 * h * h) body.restVertexFace.push_back(p);
+      if (c.distanceSquared < h * h) body.restVertexFace.push_back(p);
     }
     pairs.clear();
     selfOverlapPairs(
@@ -109,7 +109,7 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
     for (const PrimitivePair& p : pairs) {
       const auto &e = body.edges[p.a], &f = body.edges[p.b];
       const SegmentSegmentClosest c = closestSegmentSegment(x[e[0]], x[e[1]], x[f[0]], x[f[1]]);
-      if (c.distanceSquared < 4.0 * h * h) body.restEdgeEdge.push_back(p);
+      if (c.distanceSquared < h * h) body.restEdgeEdge.push_back(p);
     }
   }
 }

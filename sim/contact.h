@@ -30,7 +30,9 @@
 //
 // Neighbours in the mesh are never tested against each other: a vertex and the faces it is a
 // corner of, two edges that share a vertex; neither are pairs of a body that are closer than
-// 2 h at rest (a mesh may have nearly touching parts from the start).
+// h at rest (a mesh may have nearly touching parts from the start; excluding pairs up to 2 h
+// apart let the bunny's faces pass through each other, such pairs being common on a coarse,
+// irregular mesh).
 //
 // Deterministic: the pairs are collected in sorted order and resolved one after another on one
 // thread, so the result is the same bits on any thread count.

@@ -39,6 +39,8 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   changed_.assign(n, 0);
   stopped_.assign(n, 0);
   group_.resize(n);
+  groupMomentum_.assign(n, Vec3{});
+  groupMass_.assign(n, 0.0);
   bodies_.resize(model.bodies.size());
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     const BodyInfo& info = model.bodies[b];
@@ -176,8 +178,7 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
     } else {
       overlapPairs(V.vertexTree, F.faceTree, pairs_);
     }
-    candidates += pairs_.size();
-    if (static_cast<double>(candidates) > maxCandidates_) return false;
+    if (!withinBudget(candidates)) return false;
     for (const PrimitivePair& p : pairs_) {
       const uint32_t i = vi.firstVertex + p.a;
       const Triangle& t = model.faces[fi.firstFace + p.b];
@@ -203,8 +204,7 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
   } else {
     overlapPairs(A.edgeTree, B.edgeTree, pairs_);
   }
-  candidates += pairs_.size();
-  if (static_cast<double>(candidates) > maxCandidates_) return false;
+  if (!withinBudget(candidates)) return false;
   for (const PrimitivePair& p : pairs_) {
     const auto &e = A.edges[p.a], &f = B.edges[p.b];
     EdgeEdgeContact c;
@@ -392,18 +392,20 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
     // Each group of stopped vertices keeps its momentum: they all take its mass-weighted mean
     // end velocity (the integrator's, plus the impulses taken before stopping). Sums in vertex
     // order, per group root.
-    std::vector<Vec3> momentum(model.vertexCount());
-    std::vector<double> mass(model.vertexCount(), 0.0);
     for (uint32_t i = 0; i < model.vertexCount(); ++i) {
-      if (!stopped_[i]) continue;
-      const uint32_t r = findRoot(group_, i);
-      momentum[r] += v1[i] * model.mass[i];
-      mass[r] += model.mass[i];
+      if (stopped_[i]) groupMomentum_[findRoot(group_, i)] = Vec3{}, groupMass_[findRoot(group_, i)] = 0.0;
     }
     for (uint32_t i = 0; i < model.vertexCount(); ++i) {
       if (!stopped_[i]) continue;
+      const uint32_t r = findRoot(group_, i);
+      groupMomentum_[r] += v1[i] * model.mass[i];
+      groupMass_[r] += model.mass[i];
+    }
+    for (uint32_t i = 0; i < model.vertexCount(); ++i) {
+      if (!stopped_[i]) continue;
+      const uint32_t r = findRoot(group_, i);
       x1[i] = x0[i];
-      v1[i] = momentum[findRoot(group_, i)] / mass[findRoot(group_, i)];
+      v1[i] = groupMomentum_[r] / groupMass_[r];
     }
   }
   return true;

@@ -131,6 +131,12 @@ class BodyContacts {
                     uint64_t& candidates);
   // The contact's relative normal speed on the current paths.
   double normalSpeed(const Contact& c) const;
+  // Counts the pairs just collected (pairs_); whether the search is still within
+  // kMaxCandidatesPerPrimitive per primitive.
+  bool withinBudget(uint64_t& candidates) const {
+    candidates += pairs_.size();
+    return static_cast<double>(candidates) <= maxCandidates_;
+  }
   // Applies the contact's impulse to u; true if one was needed.
   bool impulse(const Contact& c, double dt);
 
@@ -143,6 +149,8 @@ class BodyContacts {
   std::vector<PrimitivePair> pairs_;
   std::vector<Contact> contacts_;
   std::vector<uint32_t> group_;  // union-find over the stopped vertices
+  std::vector<Vec3> groupMomentum_;  // per group root: the stopped vertices' momentum and mass
+  std::vector<double> groupMass_;
   ContactStats last_, total_;
   int impulsePasses_ = kImpulsePasses;
   double maxCandidates_ = 0.0;

@@ -179,26 +179,31 @@ void traverse(const Bvh& ta, const Bvh& tb, bool self, std::vector<NodePair>& st
 
 }  // namespace
 
-void overlapPairs(const Bvh& a, const Bvh& b, PairFilter exclude, const void* context,
+namespace {
+
+// Both queries: the traversal from the roots, then this query's pairs sorted. The stack is kept
+// per thread and reused, so a query in a time step allocates nothing once it has grown.
+void collectPairs(const Bvh& a, const Bvh& b, bool self, PairFilter exclude, const void* context,
                   std::vector<PrimitivePair>& out) {
   if (a.nodes().empty() || b.nodes().empty()) return;
-  if (!overlaps(a.nodes()[0].box, b.nodes()[0].box)) return;
+  if (!self && !overlaps(a.nodes()[0].box, b.nodes()[0].box)) return;
+  thread_local std::vector<NodePair> stack;
+  stack.clear();
   const std::size_t start = out.size();
-  std::vector<NodePair> stack;
-  stack.reserve(64);
   stack.push_back({0, 0});
-  traverse(a, b, false, stack, exclude, context, out);
+  traverse(a, b, self, stack, exclude, context, out);
   std::sort(out.begin() + static_cast<std::ptrdiff_t>(start), out.end());
 }
 
+}  // namespace
+
+void overlapPairs(const Bvh& a, const Bvh& b, PairFilter exclude, const void* context,
+                  std::vector<PrimitivePair>& out) {
+  collectPairs(a, b, false, exclude, context, out);
+}
+
 void selfOverlapPairs(const Bvh& tree, PairFilter exclude, const void* context, std::vector<PrimitivePair>& out) {
-  if (tree.nodes().empty()) return;
-  const std::size_t start = out.size();
-  std::vector<NodePair> stack;
-  stack.reserve(64);
-  stack.push_back({0, 0});
-  traverse(tree, tree, true, stack, exclude, context, out);
-  std::sort(out.begin() + static_cast<std::ptrdiff_t>(start), out.end());
+  collectPairs(tree, tree, true, exclude, context, out);
 }
 
 }  // namespace detail

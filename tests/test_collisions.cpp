@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <random>
 #include <vector>
 
+#include "random.h"
 #include "sim/colliders.h"
 #include "sim/diagnostics.h"
 #include "sim/shapes.h"
@@ -24,21 +24,7 @@ constexpr double kG = 9.81;
 
 using test::vertexModel;
 
-// Uniform double in [lo, hi) from the raw 32-bit output of mt19937 (no std:: distribution, so
-// the sequence is the same with every standard library).
-class Random {
- public:
-  explicit Random(uint32_t seed) : engine_(seed) {}
-  double uniform(double lo, double hi) {
-    const uint64_t bits = (static_cast<uint64_t>(engine_()) << 21) ^ static_cast<uint64_t>(engine_());
-    const double unit = static_cast<double>(bits & ((uint64_t{1} << 53) - 1)) * 0x1.0p-53;
-    return lo + (hi - lo) * unit;
-  }
-  Vec3 point(const Vec3& lo, const Vec3& hi) { return {uniform(lo.x, hi.x), uniform(lo.y, hi.y), uniform(lo.z, hi.z)}; }
-
- private:
-  std::mt19937 engine_;
-};
+using test::Random;
 
 // A flat quad plate (two triangles sharing the diagonal 0-2), zero thickness.
 struct Plate {

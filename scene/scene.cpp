@@ -380,6 +380,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.selfContact = r.boolean("self_contact", b.selfContact);
   b.contactThickness = r.optionalInRange("contact_thickness", 1e-9, 1e3).value_or(0.0);
   b.contactFriction = r.inRange("contact_friction", b.contactFriction, 0.0, 10.0);
+  b.contactRestitution = r.inRange("contact_restitution", b.contactRestitution, 0.0, 1.0);
   // Pins: vertex indices or rules ("top", "bottom", "left", "right", "front", "back": the
   // extreme vertex along y, x or z), and pin_near = [[x, y, z], ...]: the nearest vertex.
   // Each rule's vertex is found once however often it is named (a scan of every vertex per pin

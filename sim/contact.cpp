@@ -9,7 +9,9 @@ namespace {
 
 // A pair already closer than its thickness is pushed apart at this fraction of the overlap per
 // step (Bridson et al. 2002 §7.2 use 0.1 for their repulsion): enough to restore the gap in a
-// few steps, too little to launch anything.
+// few steps. The push moves the positions only: as a velocity it would be 0.1 (h - d) / dt, which
+// at a small step is metres per second, and a body resting on another would keep bouncing off
+// it (measured: vertices of a resting stack at 1 m/s with the push kept in the velocity).
 constexpr double kSeparationRate = 0.1;
 
 bool sharesVertex(const std::array<uint32_t, 2>& e, const std::array<uint32_t, 2>& f) {
@@ -21,6 +23,41 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t i) {
   return i;
 }
 
+// A triangle collider's edges that something can pass over without a vertex crossing a face:
+// border edges (one face), edges of three or more faces, and creases (two faces not coplanar).
+// Each once, as sorted (lower, higher) collider-local vertex indices, in sorted order.
+std::vector<std::array<uint32_t, 2>> sharpEdges(const TriMesh& mesh) {
+  struct Side {
+    std::array<uint32_t, 2> edge;
+    uint32_t face;
+  };
+  std::vector<Side> sides;
+  for (uint32_t f = 0; f < mesh.triangles.size(); ++f) {
+    const Triangle& t = mesh.triangles[f];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = t[static_cast<std::size_t>(k)], j = t[static_cast<std::size_t>((k + 1) % 3)];
+      sides.push_back({{std::min(i, j), std::max(i, j)}, f});
+    }
+  }
+  std::sort(sides.begin(), sides.end(),
+            [](const Side& a, const Side& b) { return a.edge < b.edge || (a.edge == b.edge && a.face < b.face); });
+  const auto normal = [&](uint32_t f) {
+    const Triangle& t = mesh.triangles[f];
+    const Vec3 &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
+    return normalized(cross(b - a, c - a));
+  };
+  std::vector<std::array<uint32_t, 2>> sharp;
+  for (std::size_t k = 0; k < sides.size();) {
+    std::size_t end = k;
+    while (end < sides.size() && sides[end].edge == sides[k].edge) ++end;
+    // Coplanar: the normals parallel (either way round, as a plate is two-sided) to 1e-6 rad.
+    const bool flat = end - k == 2 && length(cross(normal(sides[k].face), normal(sides[k + 1].face))) < 1e-6;
+    if (!flat) sharp.push_back(sides[k].edge);
+    k = end;
+  }
+  return sharp;
+}
+
 }  // namespace
 
 bool BodyContacts::needed(const Model& model) {
@@ -29,13 +66,56 @@ bool BodyContacts::needed(const Model& model) {
     if (b.selfContact) return true;
     if (b.contact) ++taking;
   }
-  return taking >= 2;
+  if (taking >= 2) return true;
+  if (taking == 0) return false;
+  for (const TriangleCollider& c : model.colliders.meshes) {
+    if (!sharpEdges(c.mesh).empty()) return true;
+  }
+  return false;
+}
+
+void BodyContacts::addStatics() {
+  const Model& model = *model_;
+  for (uint32_t c = 0; c < model.colliders.meshes.size(); ++c) {
+    const TriangleCollider& collider = model.colliders.meshes[c];
+    Static s;
+    s.collider = c;
+    s.friction = collider.material.friction;
+    s.restitution = collider.material.restitution;
+    s.edges = sharpEdges(collider.mesh);
+    if (s.edges.empty()) continue;
+    const uint32_t first = vertexCount_ + static_cast<uint32_t>(staticPosition_.size());
+    for (auto& e : s.edges) {
+      s.vertices.push_back(e[0]), s.vertices.push_back(e[1]);
+      e = {first + e[0], first + e[1]};
+    }
+    std::sort(s.vertices.begin(), s.vertices.end());
+    s.vertices.erase(std::unique(s.vertices.begin(), s.vertices.end()), s.vertices.end());
+    for (uint32_t& v : s.vertices) v += first;
+    staticPosition_.insert(staticPosition_.end(), collider.mesh.positions.begin(), collider.mesh.positions.end());
+    statics_.push_back(std::move(s));
+  }
+  // The trees over the still primitives, built once (boxes without margin: a body's boxes carry
+  // half its thickness, the whole thickness of a pair with a collider).
+  for (Static& s : statics_) {
+    boxes_.clear();
+    for (uint32_t v : s.vertices) boxes_.push_back(sweptBox(path(v, {}, 0.0), 0.0));
+    s.vertexTree.build(boxes_);
+    boxes_.clear();
+    for (const auto& e : s.edges) boxes_.push_back(sweptBox(path(e[0], {}, 0.0), path(e[1], {}, 0.0), 0.0));
+    s.edgeTree.build(boxes_);
+    s.box = boxes_.front();
+    for (const Box& b : boxes_) s.box = merged(s.box, b);
+  }
 }
 
 BodyContacts::BodyContacts(const Model& model) : model_(&model) {
-  const std::size_t n = model.vertexCount();
+  vertexCount_ = static_cast<uint32_t>(model.vertexCount());
+  addStatics();
+  const std::size_t n = vertexCount_ + staticPosition_.size();
   u_.assign(n, Vec3{});
   u0_.assign(n, Vec3{});
+  push_.assign(n, Vec3{});
   changed_.assign(n, 0);
   stopped_.assign(n, 0);
   group_.resize(n);
@@ -49,6 +129,7 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
     active_.push_back(b);
     body.self = info.selfContact;
     body.friction = info.contactFriction;
+    body.restitution = info.contactRestitution;
     // The edges, each once, from the faces.
     for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
       const Triangle& t = model.faces[f];
@@ -70,6 +151,7 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
     primitives +=
         model.bodies[b].vertexCount + model.bodies[b].faceCount + static_cast<double>(bodies_[b].edges.size());
   }
+  for (const Static& s : statics_) primitives += static_cast<double>(s.vertices.size() + s.edges.size());
   maxCandidates_ = kMaxCandidatesPerPrimitive * primitives;
   // Trees over the rest shape (paths that stand still).
   updateTrees(model.restPosition, 1.0);
@@ -122,7 +204,7 @@ void BodyContacts::updateTrees(const std::vector<Vec3>& x0, double dt) {
 
 void BodyContacts::updateTree(uint32_t b, const std::vector<Vec3>& x0, double dt) {
   const Model& model = *model_;
-  const auto motion = [&](uint32_t i) { return Motion{x0[i], x0[i] + u_[i] * dt}; };
+  const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
   {
     Body& body = bodies_[b];
     const BodyInfo& info = model.bodies[b];
@@ -159,7 +241,8 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
   const bool self = a == b;
   const double h = 0.5 * (A.thickness + B.thickness);
   const double mu = std::max(A.friction, B.friction) > 0.0 ? std::sqrt(A.friction * B.friction) : 0.0;
-  const auto motion = [&](uint32_t i) { return Motion{x0[i], x0[i] + u_[i] * dt}; };
+  const double restitution = std::max(A.restitution, B.restitution);
+  const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
   // Vertices of `vb` against faces of `fb`.
   const auto vertexFace = [&](uint32_t vb, uint32_t fb) {
     const Body &V = bodies_[vb], &F = bodies_[fb];
@@ -184,8 +267,13 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
       const Triangle& t = model.faces[fi.firstFace + p.b];
       VertexTriangleContact c;
       if (!vertexTriangleImpact(motion(i), motion(t[0]), motion(t[1]), motion(t[2]), h, c)) continue;
-      out.push_back(
-          {{i, t[0], t[1], t[2]}, {1.0, -c.weight[0], -c.weight[1], -c.weight[2]}, c.normal, c.distance, h, mu});
+      out.push_back({{i, t[0], t[1], t[2]},
+                     {1.0, -c.weight[0], -c.weight[1], -c.weight[2]},
+                     c.normal,
+                     c.distance,
+                     h,
+                     mu,
+                     restitution});
     }
     return true;
   };
@@ -209,7 +297,52 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
     const auto &e = A.edges[p.a], &f = B.edges[p.b];
     EdgeEdgeContact c;
     if (!edgeEdgeImpact(motion(e[0]), motion(e[1]), motion(f[0]), motion(f[1]), h, c)) continue;
-    out.push_back({{e[0], e[1], f[0], f[1]}, {1.0 - c.a, c.a, -(1.0 - c.b), -c.b}, c.normal, c.distance, h, mu});
+    out.push_back(
+        {{e[0], e[1], f[0], f[1]}, {1.0 - c.a, c.a, -(1.0 - c.b), -c.b}, c.normal, c.distance, h, mu, restitution});
+  }
+  return true;
+}
+
+bool BodyContacts::staticContacts(uint32_t b, const Static& s, const std::vector<Vec3>& x0, double dt,
+                                  std::vector<Contact>& out, uint64_t& candidates) {
+  const Model& model = *model_;
+  const Body& B = bodies_[b];
+  const BodyInfo& info = model.bodies[b];
+  const double h = 0.5 * B.thickness;
+  const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
+  // The body's edges against the collider's sharp edges.
+  pairs_.clear();
+  overlapPairs(B.edgeTree, s.edgeTree, pairs_);
+  if (!withinBudget(candidates)) return false;
+  for (const PrimitivePair& p : pairs_) {
+    const auto &e = B.edges[p.a], &f = s.edges[p.b];
+    EdgeEdgeContact c;
+    if (!edgeEdgeImpact(motion(e[0]), motion(e[1]), motion(f[0]), motion(f[1]), h, c)) continue;
+    out.push_back({{e[0], e[1], f[0], f[1]},
+                   {1.0 - c.a, c.a, -(1.0 - c.b), -c.b},
+                   c.normal,
+                   c.distance,
+                   h,
+                   s.friction,
+                   s.restitution});
+  }
+  // The collider's corners against the body's faces (the vertex is the still side: weight 1 on
+  // it, so the normal points from the face to the corner).
+  pairs_.clear();
+  overlapPairs(s.vertexTree, B.faceTree, pairs_);
+  if (!withinBudget(candidates)) return false;
+  for (const PrimitivePair& p : pairs_) {
+    const uint32_t i = s.vertices[p.a];
+    const Triangle& t = model.faces[info.firstFace + p.b];
+    VertexTriangleContact c;
+    if (!vertexTriangleImpact(motion(i), motion(t[0]), motion(t[1]), motion(t[2]), h, c)) continue;
+    out.push_back({{i, t[0], t[1], t[2]},
+                   {1.0, -c.weight[0], -c.weight[1], -c.weight[2]},
+                   c.normal,
+                   c.distance,
+                   h,
+                   s.friction,
+                   s.restitution});
   }
   return true;
 }
@@ -228,6 +361,8 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
     }
     bodies_[b].box = box;
     bodies_[b].near = bodies_[b].self;
+    for (const Static& s : statics_)
+      bodies_[b].near = bodies_[b].near || (model.bodies[b].contact && overlaps(box, s.box));
   }
   for (std::size_t k = 0; k < active_.size(); ++k) {
     for (std::size_t l = k + 1; l < active_.size(); ++l) {
@@ -251,6 +386,9 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
         if (!ok) overflowPair_ = {a, b};
       }
     }
+    for (std::size_t s = 0; ok && model.bodies[a].contact && s < statics_.size(); ++s) {
+      if (overlaps(bodies_[a].box, statics_[s].box)) ok = staticContacts(a, statics_[s], x0, dt, out, candidates);
+    }
     if (!ok && overflowPair_[0] != a) overflowPair_ = {a, a};
   }
   if (counted) *counted += candidates;
@@ -267,7 +405,7 @@ bool BodyContacts::overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, 
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
       if (!changed_[i]) continue;
       x1[i] = x0[i] + u_[i] * dt;
-      v1[i] += u_[i] - u0_[i];
+      v1[i] += u_[i] - u0_[i] - push_[i];
       changed = true;
     }
   }
@@ -280,28 +418,44 @@ double BodyContacts::normalSpeed(const Contact& c) const {
   return s;
 }
 
-bool BodyContacts::impulse(const Contact& c, double dt) {
-  const Model& model = *model_;
-  const double target = c.distance < c.thickness ? kSeparationRate * (c.thickness - c.distance) / dt : 0.0;
+bool BodyContacts::impulse(const Contact& c, double dt, bool impact) {
   const double vn = normalSpeed(c);
+  // The velocity's target: an impact from outside the thickness (the first pass, faster than the
+  // resting speed) rebounds by the restitution; any other contact stops approaching. A pair
+  // already inside the thickness is also pushed apart slowly, in position only (kSeparationRate).
+  double bounce = 0.0, push = 0.0;
+  if (c.distance < c.thickness) {
+    push = kSeparationRate * (c.thickness - c.distance) / dt;
+  } else if (impact && -vn > model_->colliders.restingSpeed) {
+    bounce = -c.restitution * vn;
+  }
+  const double target = bounce + push;
   if (!(vn < target)) return false;
   double inverseMass = 0.0;  // of the contact point along the normal: sum w_k^2 / m_k
   Vec3 relative;
   for (int k = 0; k < 4; ++k) {
-    inverseMass += c.weight[k] * c.weight[k] * model.invMass[c.vertex[k]];
+    inverseMass += c.weight[k] * c.weight[k] * this->inverseMass(c.vertex[k]);
     relative += u_[c.vertex[k]] * c.weight[k];
   }
   if (!(inverseMass > 0.0)) return false;  // every corner pinned
   const double j = (target - vn) / inverseMass;
+  // The part of j that changes the velocity (up to the bounce); the rest only moves positions.
+  const double jVelocity = std::clamp((bounce - vn) / inverseMass, 0.0, j);
   Vec3 change = c.normal * j;
-  // Coulomb friction: at most mu j off the relative tangential speed (which it may stop, not reverse).
+  // Coulomb friction: at most mu times the velocity's impulse off the relative tangential speed
+  // (which it may stop, not reverse).
   const Vec3 tangential = relative - c.normal * dot(relative, c.normal);
   const double slip = length(tangential);
-  if (c.friction > 0.0 && slip > 0.0) change -= tangential * (std::min(c.friction * j, slip / inverseMass) / slip);
+  if (c.friction > 0.0 && slip > 0.0) {
+    change -= tangential * (std::min(c.friction * jVelocity, slip / inverseMass) / slip);
+  }
+  const Vec3 pushed = c.normal * (j - jVelocity);
   for (int k = 0; k < 4; ++k) {
     const uint32_t i = c.vertex[k];
-    if (model.invMass[i] == 0.0 || c.weight[k] == 0.0) continue;
-    u_[i] += change * (c.weight[k] * model.invMass[i]);
+    const double w = this->inverseMass(i);
+    if (w == 0.0 || c.weight[k] == 0.0) continue;
+    u_[i] += change * (c.weight[k] * w);
+    push_[i] += pushed * (c.weight[k] * w);
     changed_[i] = 1;
   }
   return true;
@@ -323,6 +477,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
     const BodyInfo& info = model.bodies[b];
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
       u_[i] = u0_[i] = (x1[i] - x0[i]) / dt;
+      push_[i] = Vec3{};
       changed_[i] = 0;
       stopped_[i] = 0;
       finite = finite && std::isfinite(x0[i].x + x0[i].y + x0[i].z + u_[i].x + u_[i].y + u_[i].z);
@@ -339,7 +494,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
     if (pass == 0) last_.contacts = contacts_.size();
     bool applied = false;
     for (const Contact& c : contacts_) {
-      if (impulse(c, dt)) {
+      if (impulse(c, dt, pass == 0)) {
         applied = true;
         ++last_.impulses;
       }
@@ -358,9 +513,9 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
     for (const Contact& c : contacts_) {
       if (!approaching(c)) continue;
       for (uint32_t i : c.vertex) {
-        if (model.invMass[i] == 0.0 || stopped_[i]) continue;
+        if (inverseMass(i) == 0.0 || stopped_[i]) continue;
         if (!stoppedAny) std::iota(group_.begin(), group_.end(), 0u);
-        v1[i] += u_[i] - u0_[i];  // the impulses it took so far, whose other halves stay applied
+        v1[i] += u_[i] - u0_[i] - push_[i];  // the impulses it took so far, whose other halves stay applied
         stopped_[i] = 1;
         changed_[i] = 1;
         u_[i] = Vec3{};
@@ -385,7 +540,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
       if (!changed_[i] || stopped_[i]) continue;
       x1[i] = x0[i] + u_[i] * dt;
-      v1[i] += u_[i] - u0_[i];
+      v1[i] += u_[i] - u0_[i] - push_[i];
     }
   }
   if (stoppedAny) {

@@ -10,9 +10,12 @@
 // The response works on the paths' average velocities u = (x1 - x0) / dt, as Bridson, Fedkiw &
 // Anderson 2002 ("Robust treatment of collisions, contact and friction for cloth animation",
 // §6-7) do:
-//  1. Impulses. Every contact found is given, in a fixed order, the inelastic impulse that stops
-//     the primitives approaching each other at the contact point (relative normal speed 0, or a
-//     small separating speed when they are already closer than h), shared among the corners by
+//  1. Impulses. Every contact found is given, in a fixed order, the impulse that stops the
+//     primitives approaching each other at the contact point: relative normal speed 0, or a small
+//     separating speed when they are already closer than h, or for an impact (the first pass, from
+//     outside h, faster than the scene's resting speed) the restitution e times the approach
+//     speed, e the larger of the two bodies' (Box2D's rule: a pair bounces if either is bouncy);
+//     the impulse is shared among the corners by
 //     their barycentric weights over their masses (Bridson et al. §7.1, the weights w_k /
 //     sum w_k^2 / m_k); Coulomb friction takes up to mu times that impulse off the relative
 //     tangential speed. Then the paths are tested again, up to kImpulsePasses times.
@@ -33,6 +36,15 @@
 // h at rest (a mesh may have nearly touching parts from the start; excluding pairs up to 2 h
 // apart let the bunny's faces pass through each other, such pairs being common on a coarse,
 // irregular mesh).
+//
+// Static triangle colliders (sim/colliders.h) take part too: their vertices cannot move (mass
+// infinite, velocity 0). The colliders' own stage already keeps every vertex's path off their
+// faces; what it cannot see is an edge of a body passing over an edge of a plate (a plate's rim
+// entering between two vertices of a ball) or a plate's corner poking into a body's face. So
+// this stage tests a body's edges against the colliders' sharp edges (border edges, and creases
+// whose faces are not coplanar: across a flat edge nothing passes without a vertex crossing a
+// face first) and the corners of those edges against the body's faces, with half the body's
+// thickness and the collider's restitution and friction.
 //
 // Deterministic: the pairs are collected in sorted order and resolved one after another on one
 // thread, so the result is the same bits on any thread count.
@@ -78,8 +90,8 @@ struct ContactStats {
 
 class BodyContacts {
  public:
-  // Whether a model needs this stage: two or more bodies with contact, or a body with self
-  // contact.
+  // Whether a model needs this stage: two or more bodies with contact, a body with self contact,
+  // or a body with contact and a triangle collider with a sharp edge.
   static bool needed(const Model& model);
   // Reads `model` (which must outlive this object and not move).
   explicit BodyContacts(const Model& model);
@@ -108,10 +120,12 @@ class BodyContacts {
     double distance;
     double thickness;
     double friction;
+    double restitution;
   };
   struct Body {
     double thickness = 0.0;
     double friction = 0.0;
+    double restitution = 0.0;
     bool self = false;
     std::vector<std::array<uint32_t, 2>> edges;  // global vertex indices, each edge once, sorted
     Bvh vertexTree, edgeTree, faceTree;
@@ -119,6 +133,24 @@ class BodyContacts {
     bool near = false;  // near another body this pass, or self contact: its trees are refitted
     std::vector<PrimitivePair> restVertexFace, restEdgeEdge;  // self pairs near at rest (sorted)
   };
+  // A triangle collider's sharp edges and their corners (vertex indices from vertexCount_ on).
+  struct Static {
+    uint32_t collider = 0;  // in model.colliders.meshes
+    double friction = 0.0, restitution = 0.0;
+    std::vector<std::array<uint32_t, 2>> edges;
+    std::vector<uint32_t> vertices;
+    Bvh vertexTree, edgeTree;
+    Box box;
+  };
+  // The path of vertex i over the step (a collider's vertex stands still).
+  Motion path(uint32_t i, const std::vector<Vec3>& x0, double dt) const {
+    if (i >= vertexCount_) return {staticPosition_[i - vertexCount_], staticPosition_[i - vertexCount_]};
+    return {x0[i], x0[i] + u_[i] * dt};
+  }
+  double inverseMass(uint32_t i) const { return i < vertexCount_ ? model_->invMass[i] : 0.0; }
+  void addStatics();
+  bool staticContacts(uint32_t b, const Static& s, const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out,
+                      uint64_t& candidates);
   // Ends a step whose search overflowed: keeps the impulses applied so far, counts it.
   bool overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
   bool resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
@@ -137,13 +169,19 @@ class BodyContacts {
     candidates += pairs_.size();
     return static_cast<double>(candidates) <= maxCandidates_;
   }
-  // Applies the contact's impulse to u; true if one was needed.
-  bool impulse(const Contact& c, double dt);
+  // Applies the contact's impulse to u; true if one was needed. `impact`: the first pass, where
+  // an approach faster than the resting speed rebounds by the restitution.
+  bool impulse(const Contact& c, double dt, bool impact);
 
   const Model* model_;
   std::vector<Body> bodies_;
   std::vector<uint32_t> active_;  // bodies that take part, in order
-  std::vector<Vec3> u_, u0_;      // per vertex: the path's average velocity, now and as integrated
+  std::vector<Static> statics_;
+  uint32_t vertexCount_ = 0;          // the model's; collider vertices follow
+  std::vector<Vec3> staticPosition_;  // collider vertices
+  // Per vertex (the model's, then the colliders'): the path's average velocity, now and as integrated.
+  std::vector<Vec3> u_, u0_;
+  std::vector<Vec3> push_;  // the part of u_ - u0_ that moves positions only (kSeparationRate)
   std::vector<uint8_t> changed_, stopped_;
   std::vector<Box> boxes_;
   std::vector<PrimitivePair> pairs_;

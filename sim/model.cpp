@@ -146,6 +146,7 @@ void addBody(Model& model, const BodyDesc& desc) {
   info.selfContact = desc.selfContact;
   info.contactThickness = desc.contactThickness;
   info.contactFriction = desc.contactFriction;
+  info.contactRestitution = desc.contactRestitution;
   const uint32_t base = info.firstVertex;
 
   // Mass: angle-weighted area (docs/model.md §4, eq. A6) or uniform.

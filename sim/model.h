@@ -106,11 +106,12 @@ struct BodyDesc {
   double deformationDecay = kDefaultDeformationDecay;  // [s]
   std::vector<uint32_t> pinned;  // body-local vertex indices held fixed in place
   // Contact with other bodies (sim/contact.h) and within itself; the thickness [m] (0: a tenth
-  // of the mean edge length) and the Coulomb friction coefficient.
+  // of the mean edge length), the Coulomb friction coefficient and the restitution of impacts.
   bool contact = true;
   bool selfContact = false;
   double contactThickness = 0.0;
   double contactFriction = 0.3;
+  double contactRestitution = 0.0;
 };
 
 struct BodyInfo {
@@ -136,7 +137,7 @@ struct BodyInfo {
   double membraneModulus = 0.0, bendingModulus = 0.0;
   // Contact (BodyDesc's): with other bodies, within itself; thickness (0: automatic) [m]; friction.
   bool contact = true, selfContact = false;
-  double contactThickness = 0.0, contactFriction = 0.3;
+  double contactThickness = 0.0, contactFriction = 0.3, contactRestitution = 0.0;
   // The model's vertices are the mesh's in order along the body's longest side, so that
   // vertices near in space are near in memory and a contiguous index range is a slab of the
   // body (what one thread owns). modelVertex[k] is the global model index of the mesh's vertex

@@ -173,63 +173,162 @@ TEST(BodyContact, SelfContactKeepsAPieceOfABodyOutOfAnother) {
   }
 }
 
-// The same bits on one and two threads (the contact stage runs on one thread, in a fixed order).
-TEST(BodyContact, BitIdenticalOnOneAndTwoThreads) {
-  uint64_t hashes[2];
-  for (unsigned threads : {1u, 2u}) {
+// The same bits on 1, 2, 3 and 7 threads (the contact stage runs on one thread, in a fixed
+// order; the forces are split by vertex ownership).
+TEST(BodyContact, BitIdenticalOnAnyThreadCount) {
+  std::vector<uint64_t> hashes;
+  for (unsigned threads : {1u, 2u, 3u, 7u}) {
     World world(twoBalls(true), Integrator::RK4, kStep);
     world.setThreads(threads, 0);
     for (int s = 0; s < 1200; ++s) world.step();
-    hashes[threads - 1] = stateHash(world);
+    EXPECT_GT(world.bodyContacts()->sinceStart().contacts, 0u);
+    hashes.push_back(stateHash(world));
   }
-  EXPECT_EQ(hashes[0], hashes[1]);
+  for (std::size_t k = 1; k < hashes.size(); ++k) EXPECT_EQ(hashes[k], hashes[0]) << "thread count #" << k;
 }
 
-// The fail-safe alone (no impulse passes): vertices in an approaching contact stop for the step,
-// so nothing crosses, and each group of stopped vertices shares its momentum, so the total is
-// kept.
-TEST(BodyContact, FailSafeAloneKeepsBodiesApartAndMomentum) {
-  World world(twoBalls(true), Integrator::RK4, kStep);
-  world.bodyContacts()->setImpulsePasses(0);
-  const Vec3 p0 = momentum(world);
-  uint64_t stopped = 0;
-  for (int s = 0; s < 1500; ++s) {
+// One step of a body's vertex coming down at 5 m/s onto another body's face (the tip of an
+// octahedron onto the top of a cube), resolved by the contact stage alone: the contact point's
+// relative normal velocity at the end of the step is the restitution times the approach (the
+// larger of the two bodies' restitution), and momentum is kept.
+TEST(BodyContact, AnImpactReboundsByTheRestitution) {
+  for (double restitution : {0.0, 0.5, 1.0}) {
+    Model model;
+    model.gravity = {};
+    model.colliders.restingSpeed = 0.1;
+    BodyDesc cube = ball("cube", {}, {});
+    cube.mesh = makeCube(2.0, 1);  // top face at y = 1
+    cube.contactThickness = 1e-3;
+    cube.contactRestitution = 0.5 * restitution;  // the pair takes the larger
+    BodyDesc tip = ball("tip", {}, {});
+    tip.mesh = moved(makeOctahedronSphere(0.3, 1), {0.5, 1.0 + 0.3 + 0.02, -0.3});  // pole 2 cm above
+    tip.contactThickness = 1e-3;
+    tip.contactRestitution = restitution;
+    addBody(model, cube);
+    addBody(model, tip);
+    const double dt = 0.01, speed = 5.0;  // 5 cm in the step: the pole meets the face at 0.4 of it
+    const std::vector<Vec3> x0 = model.restPosition;
+    std::vector<Vec3> x1 = x0, v1(x0.size());
+    const BodyInfo& moving = model.bodies[1];
+    uint32_t pole = moving.firstVertex;
+    for (uint32_t i = moving.firstVertex; i < moving.firstVertex + moving.vertexCount; ++i) {
+      v1[i] = {0.0, -speed, 0.0};
+      x1[i] = x0[i] + v1[i] * dt;
+      if (x0[i].y < x0[pole].y) pole = i;
+    }
+    Vec3 p0;
+    for (uint32_t i = 0; i < x0.size(); ++i) p0 += v1[i] * model.mass[i];
+    BodyContacts contacts(model);
+    ASSERT_TRUE(contacts.resolve(x0, x1, v1, dt));
+    EXPECT_EQ(contacts.lastStep().contacts, 1u);
+    // The cube's face under the pole, and the weights of the pole's point on it.
+    const Vec3 at = x0[pole];
+    bool found = false;
+    for (uint32_t f = 0; f < model.bodies[0].faceCount && !found; ++f) {
+      const Triangle& t = model.faces[f];
+      const PointTriangleClosest c = closestPointTriangle({at.x, 1.0, at.z}, x0[t[0]], x0[t[1]], x0[t[2]]);
+      if (c.distanceSquared > 1e-20 || x0[t[0]].y != 1.0 || x0[t[1]].y != 1.0 || x0[t[2]].y != 1.0) continue;
+      found = true;
+      const double faceSpeed = c.weight[0] * v1[t[0]].y + c.weight[1] * v1[t[1]].y + c.weight[2] * v1[t[2]].y;
+      EXPECT_NEAR(v1[pole].y - faceSpeed, restitution * speed, 1e-9 * speed) << "restitution " << restitution;
+      EXPECT_LT(v1[t[0]].y, 0.0);  // the face was pushed down
+    }
+    EXPECT_TRUE(found);
+    Vec3 p1;
+    for (uint32_t i = 0; i < x0.size(); ++i) p1 += v1[i] * model.mass[i];
+    EXPECT_NEAR(length(p1 - p0), 0.0, 1e-12 * length(p0));
+  }
+}
+
+// A ball resting on a ball resting on the ground: after it settles it stays where it is (it
+// neither sinks in nor slides off nor creeps), the two never cross, and what motion is left dies
+// away. (Two soft balls stacked rock gently about their contact, a rigid rotation that the
+// deformation damping leaves alone: measured, a top vertex at 0.16 m/s after 3 s, its energy
+// falling by about a fifth per 0.35 s cycle, through friction. Jitter, the contact's impulses and
+// gravity bouncing a vertex step after step, would not die away.)
+TEST(BodyContact, ABallRestingOnABallStaysAtRest) {
+  Model model;
+  // Centred (a ball on a ball is an unstable balance; flattened at the contact and with friction,
+  // a soft one holds there).
+  BodyDesc lowerBall = ball("lower", {0.0, 0.52, 0.0}, {}), upperBall = ball("upper", {0.0, 1.6, 0.0}, {});
+  lowerBall.contactFriction = upperBall.contactFriction = 1.0;
+  // Damped well enough to settle within the test's 3 s: the upper ball bounces on the lower
+  // one as on a spring (both soft), and with the default decay (0.1 s) that takes over 5 s.
+  lowerBall.deformationDecay = upperBall.deformationDecay = 0.02;
+  addBody(model, lowerBall);
+  addBody(model, upperBall);
+  PlaneCollider ground;
+  ground.point = {};
+  ground.normal = {0.0, 1.0, 0.0};
+  ground.material = {0.0, 0.5};
+  model.colliders.planes.push_back(ground);
+  const double dt = 5e-4;
+  model.colliders.restingSpeed = 4.0 * 9.81 * dt;
+  World world(std::move(model), Integrator::SymplecticEuler, dt);
+  for (int s = 0; s < 6000; ++s) {  // 3 s: the drop, the squash, settling
     world.step();
-    stopped += world.bodyContacts()->lastStep().stopped;
-    if (s % 10 == 0) {
-      ASSERT_TRUE(findIntersections(world.model(), world.positions(), 1).empty()) << "crossed at step " << s;
+    if (s % 50 == 0) {
+      ASSERT_TRUE(findIntersections(world.model(), world.positions(), 1).empty()) << "step " << s;
     }
   }
-  EXPECT_GT(stopped, 0u);
-  const Vec3 p1 = momentum(world);
-  EXPECT_NEAR(p1.x, p0.x, 1e-9);
-  EXPECT_NEAR(p1.y, p0.y, 1e-9);
-  EXPECT_NEAR(p1.z, p0.z, 1e-9);
+  const Vec3 lower = measureBody(world, 0).centroid, upper = measureBody(world, 1).centroid;
+  EXPECT_GT(upper.y - lower.y, 0.9);  // on top, not sunk in (radii 0.5 each, flattened a little)
+  const auto kinetic = [&] { return measureBody(world, 0).kinetic + measureBody(world, 1).kinetic; };
+  // Over the first and the last 0.35 s (a cycle of the rocking): the most kinetic energy, and the
+  // upper ball's mean centroid.
+  double first = 0.0, last = 0.0;
+  Vec3 firstMean, lastMean;
+  for (int s = 0; s < 2100; ++s) {  // 1.05 s more
+    world.step();
+    if (s < 700) first = std::max(first, kinetic()), firstMean += measureBody(world, 1).centroid / 700.0;
+    if (s >= 1400) last = std::max(last, kinetic()), lastMean += measureBody(world, 1).centroid / 700.0;
+    if (s % 50 == 0) {
+      ASSERT_TRUE(findIntersections(world.model(), world.positions(), 1).empty()) << "step " << s;
+    }
+  }
+  EXPECT_LT(last, 0.7 * first) << "the motion at rest does not die away";
+  EXPECT_LT(length(lastMean - firstMean), 1e-3) << "the upper ball creeps";
+  EXPECT_LT(length(measureBody(world, 0).centroid - lower), 5e-3);
+  EXPECT_GT(measureBody(world, 1).centroid.y - measureBody(world, 0).centroid.y, 0.9);
 }
 
-// Two balls side by side whose vertices fly about at 10 km/s (a blown-up state): every
-// primitive's swept box overlaps most of the other ball's. The search gives up after
-// kMaxCandidatesPerPrimitive candidates per primitive instead of testing them all (quadratic in
-// the bodies' size), counts the overflow, and the monitor stops the run naming it.
-TEST(BodyContact, AnOverflowingSearchIsReportedNotSkippedSilently) {
-  Model model;
-  model.gravity = {};
-  addBody(model, ball("a", {-0.55, 0.0, 0.0}, {}));
-  addBody(model, ball("b", {0.55, 0.0, 0.0}, {}));
-  uint64_t state = 12345;
-  const auto next = [&] {  // a fixed sequence in [-1, 1)
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<double>(state >> 11) * 0x1.0p-52 - 1.0;
-  };
-  for (Vec3& v : model.initialVelocity) v = Vec3{next(), next(), next()} * 1e4;
-  World world(std::move(model), Integrator::SymplecticEuler, kStep);
-  Monitor monitor(world);
-  world.step();
-  EXPECT_EQ(world.bodyContacts()->lastStep().overflows, 1u);
-  const std::optional<Failure> failure = monitor.check(world);
-  ASSERT_TRUE(failure.has_value());
-  EXPECT_NE(failure->message.find("contact search"), std::string::npos) << failure->message;
-  EXPECT_NE(failure->message.find("'b'"), std::string::npos) << failure->message;
+// A thin plate's rim entering a ball from the side, between its vertices: no vertex of the ball
+// ever crosses the plate (they pass above and below it), so the colliders' vertex test cannot
+// see it; the edge test of the contact stage does. With contact the rim never enters the ball's
+// surface; without (a ghost body), it slices through.
+TEST(BodyContact, APlateRimEnteringBetweenVerticesIsCaught) {
+  for (bool contact : {false, true}) {
+    Model model;
+    model.gravity = {};
+    BodyDesc desc = ball("ball", {-0.7, 0.0, 0.0}, {5.0, 0.0, 0.0}, contact);
+    desc.mesh = moved(makeIcosphere(0.5, 1), {-0.7, 0.0, 0.0});  // 42 vertices: wide gaps between them
+    addBody(model, desc);
+    TriangleCollider plate;
+    plate.name = "plate";
+    const double y = 0.0123;  // between the ball's vertex rows, none in the plate's plane
+    plate.mesh.positions = {{0.0, y, -2.0}, {0.0, y, 2.0}, {3.0, y, 2.0}, {3.0, y, -2.0}};
+    plate.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+    plate.material = {0.0, 0.0};
+    model.colliders.meshes.push_back(plate);
+    World world(std::move(model), Integrator::RK4, kStep);
+    EXPECT_EQ(world.bodyContacts() != nullptr, contact);
+    const Vec3 rimA = {0.0, y, -2.0}, rimB = {0.0, y, 2.0};
+    bool entered = false;
+    for (int s = 0; s < 1000 && !entered; ++s) {  // 0.2 s: 1 m of travel
+      world.step();
+      for (uint32_t f = 0; f < world.model().faces.size() && !entered; ++f) {
+        const Triangle& t = world.model().faces[f];
+        Vec3 at;
+        entered = segmentCrossesTriangle(rimA, rimB, world.positions()[t[0]], world.positions()[t[1]],
+                                         world.positions()[t[2]], at);
+      }
+    }
+    EXPECT_EQ(entered, !contact) << (contact ? "the rim entered the ball" : "the rim should slice through a ghost");
+    if (contact) {
+      EXPECT_GT(world.bodyContacts()->sinceStart().contacts, 0u);
+      EXPECT_LT(measureBody(world, 0).momentum.x, 0.0);  // stopped and pushed back by its own elasticity
+    }
+  }
 }
 
 // A scene whose bodies start crossing is refused at load, naming both bodies and their faces.
@@ -255,18 +354,19 @@ TEST(BodyContact, SceneKeys) {
   const std::string body = "[[body]]\nshape = \"icosphere\"\nsubdivisions = 1\n";
   const SceneDesc scene = parseScene(body +
                                          "contact = false\nself_contact = true\ncontact_thickness = 0.02\n"
-                                         "contact_friction = 0.7\n",
+                                         "contact_friction = 0.7\ncontact_restitution = 0.4\n",
                                      "keys.toml");
   EXPECT_FALSE(scene.bodies[0].contact);
   EXPECT_TRUE(scene.bodies[0].selfContact);
   EXPECT_EQ(scene.bodies[0].contactThickness, 0.02);
   EXPECT_EQ(scene.bodies[0].contactFriction, 0.7);
+  EXPECT_EQ(scene.bodies[0].contactRestitution, 0.4);
   const SceneDesc plain = parseScene(body, "plain.toml");
   EXPECT_TRUE(plain.bodies[0].contact);
   EXPECT_FALSE(plain.bodies[0].selfContact);
   EXPECT_EQ(plain.bodies[0].contactThickness, 0.0);  // automatic
   for (const std::string& bad : {std::string("contact_friction = -1\n"), std::string("contact_thickness = 0\n"),
-                                 std::string("self_contact = 3\n")}) {
+                                 std::string("contact_restitution = 1.5\n"), std::string("self_contact = 3\n")}) {
     try {
       parseScene(body + bad, "bad.toml");
       FAIL() << "accepted " << bad;

@@ -58,6 +58,49 @@ std::vector<std::array<uint32_t, 2>> sharpEdges(const TriMesh& mesh) {
   return sharp;
 }
 
+// Candidate pairs (p of tree a, q of tree b; for one tree, `self`, p < q) whose boxes overlap.
+// A full pass takes them all (one traversal of the two trees). A later pass takes only the pairs
+// with a primitive whose path changed in the pass before (`dirtyA`, `dirtyB`), found by querying
+// the other tree with its box: a pair of two unchanged primitives was tested then and needed no
+// impulse, or they would have changed, so it needs none now. Either way sorted, each pair once,
+// so that a later pass applies exactly the impulses a full one would, in the same order.
+template <class DirtyA, class DirtyB, class Exclude>
+void candidatePairs(bool full, const Bvh& a, const Bvh& b, bool self, const DirtyA& dirtyA, const DirtyB& dirtyB,
+                    const Exclude& exclude, std::vector<uint32_t>& hits, std::vector<PrimitivePair>& out) {
+  out.clear();
+  if (full) {
+    if (self) {
+      selfOverlapPairs(a, exclude, out);
+    } else {
+      overlapPairs(a, b, exclude, out);
+    }
+    return;
+  }
+  for (uint32_t p = 0; p < a.primitiveCount(); ++p) {
+    if (!dirtyA(p)) continue;
+    hits.clear();
+    b.query(a.boxOf(p), hits);
+    for (uint32_t q : hits) {
+      if (self && p == q) continue;
+      const PrimitivePair pair = self ? PrimitivePair{std::min(p, q), std::max(p, q)} : PrimitivePair{p, q};
+      if (!exclude(pair.a, pair.b)) out.push_back(pair);
+    }
+  }
+  for (uint32_t q = 0; !self && q < b.primitiveCount(); ++q) {
+    if (!dirtyB(q)) continue;
+    hits.clear();
+    a.query(b.boxOf(q), hits);
+    for (uint32_t p : hits) {
+      if (!dirtyA(p) && !exclude(p, q)) out.push_back({p, q});  // with p dirty: found above
+    }
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+constexpr auto kNoExclusion = [](uint32_t, uint32_t) { return false; };
+constexpr auto kNeverDirty = [](uint32_t) { return false; };
+
 }  // namespace
 
 bool BodyContacts::needed(const Model& model) {
@@ -117,6 +160,8 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   u0_.assign(n, Vec3{});
   push_.assign(n, Vec3{});
   changed_.assign(n, 0);
+  touched_.assign(n, 0);
+  dirty_.assign(n, 0);
   stopped_.assign(n, 0);
   group_.resize(n);
   groupMomentum_.assign(n, Vec3{});
@@ -247,19 +292,20 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
   const auto vertexFace = [&](uint32_t vb, uint32_t fb) {
     const Body &V = bodies_[vb], &F = bodies_[fb];
     const BodyInfo &vi = model.bodies[vb], &fi = model.bodies[fb];
-    pairs_.clear();
+    const auto dirtyVertex = [&](uint32_t v) { return dirty_[vi.firstVertex + v] != 0; };
+    const auto dirtyFace = [&](uint32_t f) { return dirtyCorner(model.faces[fi.firstFace + f]); };
     if (self) {
-      overlapPairs(
-          V.vertexTree, F.faceTree,
+      candidatePairs(
+          full_, V.vertexTree, F.faceTree, false, dirtyVertex, dirtyFace,
           [&](uint32_t v, uint32_t f) {
             const Triangle& t = model.faces[fi.firstFace + f];
             const uint32_t i = vi.firstVertex + v;
             return t[0] == i || t[1] == i || t[2] == i ||
                    std::binary_search(V.restVertexFace.begin(), V.restVertexFace.end(), PrimitivePair{v, f});
           },
-          pairs_);
+          hits_, pairs_);
     } else {
-      overlapPairs(V.vertexTree, F.faceTree, pairs_);
+      candidatePairs(full_, V.vertexTree, F.faceTree, false, dirtyVertex, dirtyFace, kNoExclusion, hits_, pairs_);
     }
     if (!withinBudget(candidates)) return false;
     for (const PrimitivePair& p : pairs_) {
@@ -280,17 +326,18 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
   if (!vertexFace(a, b)) return false;
   if (!self && !vertexFace(b, a)) return false;
   // Edges against edges.
-  pairs_.clear();
+  const auto dirtyEdgeA = [&](uint32_t e) { return dirtyEdge(A.edges[e]); };
+  const auto dirtyEdgeB = [&](uint32_t e) { return dirtyEdge(B.edges[e]); };
   if (self) {
-    selfOverlapPairs(
-        A.edgeTree,
+    candidatePairs(
+        full_, A.edgeTree, A.edgeTree, true, dirtyEdgeA, dirtyEdgeA,
         [&](uint32_t e, uint32_t f) {
           return sharesVertex(A.edges[e], A.edges[f]) ||
                  std::binary_search(A.restEdgeEdge.begin(), A.restEdgeEdge.end(), PrimitivePair{e, f});
         },
-        pairs_);
+        hits_, pairs_);
   } else {
-    overlapPairs(A.edgeTree, B.edgeTree, pairs_);
+    candidatePairs(full_, A.edgeTree, B.edgeTree, false, dirtyEdgeA, dirtyEdgeB, kNoExclusion, hits_, pairs_);
   }
   if (!withinBudget(candidates)) return false;
   for (const PrimitivePair& p : pairs_) {
@@ -311,8 +358,9 @@ bool BodyContacts::staticContacts(uint32_t b, const Static& s, const std::vector
   const double h = 0.5 * B.thickness;
   const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
   // The body's edges against the collider's sharp edges.
-  pairs_.clear();
-  overlapPairs(B.edgeTree, s.edgeTree, pairs_);
+  candidatePairs(
+      full_, B.edgeTree, s.edgeTree, false, [&](uint32_t e) { return dirtyEdge(B.edges[e]); }, kNeverDirty,
+      kNoExclusion, hits_, pairs_);
   if (!withinBudget(candidates)) return false;
   for (const PrimitivePair& p : pairs_) {
     const auto &e = B.edges[p.a], &f = s.edges[p.b];
@@ -328,8 +376,9 @@ bool BodyContacts::staticContacts(uint32_t b, const Static& s, const std::vector
   }
   // The collider's corners against the body's faces (the vertex is the still side: weight 1 on
   // it, so the normal points from the face to the corner).
-  pairs_.clear();
-  overlapPairs(s.vertexTree, B.faceTree, pairs_);
+  candidatePairs(
+      full_, s.vertexTree, B.faceTree, false, kNeverDirty,
+      [&](uint32_t f) { return dirtyCorner(model.faces[info.firstFace + f]); }, kNoExclusion, hits_, pairs_);
   if (!withinBudget(candidates)) return false;
   for (const PrimitivePair& p : pairs_) {
     const uint32_t i = s.vertices[p.a];
@@ -351,18 +400,21 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
   uint64_t candidates = 0;
   const Model& model = *model_;
   out.clear();
-  // Each body's swept box first (one pass over its vertices): the trees of a body that is near
-  // no other and has no self contact are not needed this pass.
+  // Each moved body's swept box first (one pass over its vertices): the trees of a body that is
+  // near no other and has no self contact are not needed this pass.
   for (uint32_t b : active_) {
     const BodyInfo& info = model.bodies[b];
+    if (!bodies_[b].moved) continue;
     Box box{x0[info.firstVertex], x0[info.firstVertex]};
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
       box = merged(box, sweptBox(Motion{x0[i], x0[i] + u_[i] * dt}, 0.5 * bodies_[b].thickness));
     }
     bodies_[b].box = box;
+  }
+  for (uint32_t b : active_) {
     bodies_[b].near = bodies_[b].self;
     for (const Static& s : statics_)
-      bodies_[b].near = bodies_[b].near || (model.bodies[b].contact && overlaps(box, s.box));
+      bodies_[b].near = bodies_[b].near || (model.bodies[b].contact && overlaps(bodies_[b].box, s.box));
   }
   for (std::size_t k = 0; k < active_.size(); ++k) {
     for (std::size_t l = k + 1; l < active_.size(); ++l) {
@@ -373,20 +425,23 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
     }
   }
   for (uint32_t b : active_) {
-    if (bodies_[b].near) updateTree(b, x0, dt);
+    if (bodies_[b].near && !bodies_[b].fresh) updateTree(b, x0, dt), bodies_[b].fresh = true;
   }
+  // The pairs with a body that moved since the last pass (all on the first): a pair of two bodies
+  // that did not has had every contact satisfied in that pass, or they would have moved.
   bool ok = true;
   for (std::size_t k = 0; ok && k < active_.size(); ++k) {
     const uint32_t a = active_[k];
-    if (bodies_[a].self) ok = pairContacts(a, a, x0, dt, out, candidates);
+    const bool movedA = bodies_[a].moved;
+    if (bodies_[a].self && movedA) ok = pairContacts(a, a, x0, dt, out, candidates);
     for (std::size_t l = k + 1; ok && model.bodies[a].contact && l < active_.size(); ++l) {
       const uint32_t b = active_[l];
-      if (model.bodies[b].contact && overlaps(bodies_[a].box, bodies_[b].box)) {
+      if ((movedA || bodies_[b].moved) && model.bodies[b].contact && overlaps(bodies_[a].box, bodies_[b].box)) {
         ok = pairContacts(a, b, x0, dt, out, candidates);
         if (!ok) overflowPair_ = {a, b};
       }
     }
-    for (std::size_t s = 0; ok && model.bodies[a].contact && s < statics_.size(); ++s) {
+    for (std::size_t s = 0; ok && movedA && model.bodies[a].contact && s < statics_.size(); ++s) {
       if (overlaps(bodies_[a].box, statics_[s].box)) ok = staticContacts(a, statics_[s], x0, dt, out, candidates);
     }
     if (!ok && overflowPair_[0] != a) overflowPair_ = {a, a};
@@ -456,9 +511,25 @@ bool BodyContacts::impulse(const Contact& c, double dt, bool impact) {
     if (w == 0.0 || c.weight[k] == 0.0) continue;
     u_[i] += change * (c.weight[k] * w);
     push_[i] += pushed * (c.weight[k] * w);
-    changed_[i] = 1;
+    changed_[i] = touched_[i] = 1;
   }
   return true;
+}
+
+void BodyContacts::markMoved() {
+  const Model& model = *model_;
+  for (uint32_t b : active_) {
+    const BodyInfo& info = model.bodies[b];
+    bool moved = false;
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+      moved = moved || touched_[i];
+      dirty_[i] = touched_[i];
+      touched_[i] = 0;
+    }
+    bodies_[b].moved = moved;
+    if (moved) bodies_[b].fresh = false;
+  }
+  full_ = false;
 }
 
 bool BodyContacts::resolve(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
@@ -478,7 +549,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
       u_[i] = u0_[i] = (x1[i] - x0[i]) / dt;
       push_[i] = Vec3{};
-      changed_[i] = 0;
+      changed_[i] = touched_[i] = 0;
       stopped_[i] = 0;
       finite = finite && std::isfinite(x0[i].x + x0[i].y + x0[i].z + u_[i].x + u_[i].y + u_[i].z);
     }
@@ -486,9 +557,11 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
   // A state that is no longer finite has blown up: there is no contact to resolve, and the
   // monitor (sim/monitor.h) stops the run at its next check.
   if (!finite) return false;
+  for (uint32_t b : active_) bodies_[b].moved = true, bodies_[b].fresh = false;
+  full_ = true;
   // 1. Impulses, pass after pass, until no contact needs one.
-  bool any = false;
-  for (int pass = 0; pass < impulsePasses_; ++pass) {
+  bool any = false, settled = false;
+  for (int pass = 0; pass < impulsePasses_ && !settled; ++pass) {
     if (!findContacts(x0, dt, contacts_, pass == 0 ? &last_.candidates : nullptr)) return overflow(x0, x1, v1, dt);
     ++last_.passes;
     if (pass == 0) last_.contacts = contacts_.size();
@@ -500,13 +573,15 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
       }
     }
     any = any || applied;
-    if (!applied) break;
+    settled = !applied;
+    if (applied) markMoved();
   }
   if (!any && impulsePasses_ > 0) return false;
-  // 2. Fail-safe: stop every vertex still in an approaching contact, until none is left.
+  // 2. Fail-safe: stop every vertex still in an approaching contact, until none is left (a
+  // pass that needed no impulse has none left).
   const auto approaching = [&](const Contact& c) { return normalSpeed(c) < -1e-9 * c.thickness / dt; };
   bool stoppedAny = false;
-  for (;;) {
+  while (!settled) {
     if (!findContacts(x0, dt, contacts_, nullptr)) return overflow(x0, x1, v1, dt);
     ++last_.passes;
     bool stoppedNow = false;
@@ -517,7 +592,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
         if (!stoppedAny) std::iota(group_.begin(), group_.end(), 0u);
         v1[i] += u_[i] - u0_[i] - push_[i];  // the impulses it took so far, whose other halves stay applied
         stopped_[i] = 1;
-        changed_[i] = 1;
+        changed_[i] = touched_[i] = 1;
         u_[i] = Vec3{};
         stoppedAny = stoppedNow = true;
         ++last_.stopped;
@@ -533,6 +608,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
       }
     }
     if (!stoppedNow) break;
+    markMoved();
   }
   // 3. New positions and end velocities.
   for (uint32_t b : active_) {

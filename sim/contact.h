@@ -131,6 +131,8 @@ class BodyContacts {
     Bvh vertexTree, edgeTree, faceTree;
     Box box;            // the swept box of the whole body this pass
     bool near = false;  // near another body this pass, or self contact: its trees are refitted
+    bool moved = true;  // its paths changed in the last pass (every body on the first)
+    bool fresh = false;                                       // its trees hold its current paths
     std::vector<PrimitivePair> restVertexFace, restEdgeEdge;  // self pairs near at rest (sorted)
   };
   // A triangle collider's sharp edges and their corners (vertex indices from vertexCount_ on).
@@ -151,6 +153,8 @@ class BodyContacts {
   void addStatics();
   bool staticContacts(uint32_t b, const Static& s, const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out,
                       uint64_t& candidates);
+  // After a pass: which bodies' paths it changed (Body::moved), from touched_, which it clears.
+  void markMoved();
   // Ends a step whose search overflowed: keeps the impulses applied so far, counts it.
   bool overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
   bool resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
@@ -183,6 +187,12 @@ class BodyContacts {
   std::vector<Vec3> u_, u0_;
   std::vector<Vec3> push_;  // the part of u_ - u0_ that moves positions only (kSeparationRate)
   std::vector<uint8_t> changed_, stopped_;
+  std::vector<uint8_t> touched_;  // changed in the current pass (per vertex)
+  std::vector<uint8_t> dirty_;    // changed in the pass before (per vertex; collider vertices never)
+  bool full_ = true;              // this pass tests every candidate pair (the first of a step)
+  std::vector<uint32_t> hits_;    // a tree query's result
+  bool dirtyEdge(const std::array<uint32_t, 2>& e) const { return dirty_[e[0]] || dirty_[e[1]]; }
+  bool dirtyCorner(const Triangle& t) const { return dirty_[t[0]] || dirty_[t[1]] || dirty_[t[2]]; }
   std::vector<Box> boxes_;
   std::vector<PrimitivePair> pairs_;
   std::vector<Contact> contacts_;

@@ -59,6 +59,8 @@ void Bvh::build(std::span<const Box> boxes) {
   }
   box_.resize(n);
   for (uint32_t k = 0; k < n; ++k) box_[k] = boxes[primitive_[k]];
+  slot_.resize(n);
+  for (uint32_t k = 0; k < n; ++k) slot_[primitive_[k]] = k;
   refitNodes();
   builtQuality_ = quality();
 }
@@ -109,6 +111,27 @@ double Bvh::degradation() const {
   const double now = quality();
   if (builtQuality_ > 0.0) return now / builtQuality_;
   return now > 0.0 ? std::numeric_limits<double>::infinity() : 1.0;
+}
+
+void Bvh::query(const Box& box, std::vector<uint32_t>& out) const {
+  if (nodes_.empty()) return;
+  thread_local std::vector<uint32_t> stack;
+  stack.clear();
+  stack.push_back(0);
+  while (!stack.empty()) {
+    const uint32_t i = stack.back();
+    stack.pop_back();
+    const Node& node = nodes_[i];
+    if (!overlaps(node.box, box)) continue;
+    if (node.leaf()) {
+      for (uint32_t k = node.first; k < node.first + node.count; ++k) {
+        if (overlaps(box_[k], box)) out.push_back(primitive_[k]);
+      }
+    } else {
+      stack.push_back(node.right);
+      stack.push_back(i + 1);
+    }
+  }
 }
 
 namespace detail {

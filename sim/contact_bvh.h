@@ -67,6 +67,9 @@ class Bvh {
   const std::vector<Node>& nodes() const { return nodes_; }
   uint32_t primitiveAt(uint32_t slot) const { return primitive_[slot]; }  // primitive in leaf slot
   const Box& boxAt(uint32_t slot) const { return box_[slot]; }            // its box
+  const Box& boxOf(uint32_t primitive) const { return box_[slot_[primitive]]; }  // a primitive's box
+  // Appends every primitive whose box overlaps `box`, in the tree's leaf order.
+  void query(const Box& box, std::vector<uint32_t>& out) const;
 
  private:
   double quality() const;  // sum of inner node surface areas / the root's
@@ -74,6 +77,7 @@ class Bvh {
 
   std::vector<Node> nodes_;
   std::vector<uint32_t> primitive_;  // leaf order -> primitive index
+  std::vector<uint32_t> slot_;       // primitive index -> leaf order
   std::vector<Box> box_;             // primitive boxes in leaf order
   double builtQuality_ = 0.0;
 };

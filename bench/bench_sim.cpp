@@ -13,6 +13,7 @@
 #include <thread>
 #include <vector>
 
+#include "sim/contact.h"
 #include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/model.h"
@@ -146,6 +147,75 @@ void BM_Forces(benchmark::State& state) {
   nsPer(state, "ns_per_vertex", static_cast<double>(model.vertexCount()));
 }
 BENCHMARK(BM_Forces)->DenseRange(2, 6)->UseRealTime();
+
+// --- contact between bodies (sim/contact.h): a layer of touching balls on the ground
+
+// `count` balls of the body material (icosphere `level`, radius 0.25 m, 0.5 kg) side by side in a
+// square grid on the ground, each a quarter of its contact thickness from its neighbours (so
+// every neighbour pair is in contact, as in a resting pile), and one free-fall step of
+// dt = 2e-4 s from rest: x1 = x0 + g dt^2, v1 = g dt.
+struct ContactLayer {
+  Model model;
+  std::vector<Vec3> x0, x1, v1;
+  double dt = 2e-4;
+};
+ContactLayer contactLayer(int level, int count) {
+  ContactLayer layer;
+  layer.model.colliders.planes.push_back(PlaneCollider{{0, 0, 0}, {0, 1, 0}, 0.0, 0.5});
+  const TriMesh sphere = makeIcosphere(0.25, level);
+  double edges = 0.0;
+  for (const Triangle& t : sphere.triangles) edges += length(sphere.positions[t[1]] - sphere.positions[t[0]]);
+  const double gap = 0.25 * kDefaultThicknessFactor * edges / static_cast<double>(sphere.triangles.size());
+  const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(count))));
+  for (int k = 0; k < count; ++k) {
+    BodyDesc desc;
+    desc.name = "ball " + std::to_string(k);
+    desc.mesh = sphere;
+    const Vec3 at{(k % side) * (0.5 + gap), 0.25 + gap, (k / side) * (0.5 + gap)};
+    for (Vec3& p : desc.mesh.positions) p += at;
+    desc.mass = 0.5;
+    desc.material = MaterialModel::Body;
+    addBody(layer.model, desc);
+  }
+  layer.x0 = layer.model.restPosition;
+  layer.x1 = layer.x0;
+  layer.v1.assign(layer.x0.size(), Vec3{0.0, -9.81 * layer.dt, 0.0});
+  for (Vec3& p : layer.x1) p.y -= 9.81 * layer.dt * layer.dt;
+  return layer;
+}
+
+// The contact stage's search and response for one step (state.range(0): the icosphere level,
+// range(1): the number of balls); the copy of the step's end state each iteration is included.
+void BM_ContactStage(benchmark::State& state) {
+  const ContactLayer layer = contactLayer(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  BodyContacts contacts(layer.model);
+  std::vector<Vec3> x1, v1;
+  uint64_t found = 0;
+  for (auto _ : state) {
+    x1 = layer.x1, v1 = layer.v1;
+    contacts.resolve(layer.x0, x1, v1, layer.dt);
+    found = contacts.lastStep().contacts;
+    benchmark::DoNotOptimize(x1.data());
+  }
+  state.counters["contacts"] = static_cast<double>(found);
+  nsPer(state, "ns_per_vertex", static_cast<double>(layer.model.vertexCount()));
+}
+// One force evaluation of the same layer, for the ratio.
+void BM_ContactLayerForces(benchmark::State& state) {
+  const ContactLayer layer = contactLayer(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const World world(layer.model, Integrator::SymplecticEuler, layer.dt);
+  std::vector<Vec3> f(layer.model.vertexCount());
+  for (auto _ : state) {
+    world.computeForces(layer.x1.data(), layer.v1.data(), 0.0, f.data());
+    benchmark::DoNotOptimize(f.data());
+    benchmark::ClobberMemory();
+  }
+  nsPer(state, "ns_per_vertex", static_cast<double>(layer.model.vertexCount()));
+}
+// Linear in the number of bodies (2 to 64 balls of 162 vertices), and a pile's size: 27 balls of
+// 642 vertices, 17334 vertices.
+BENCHMARK(BM_ContactStage)->ArgsProduct({{2}, {2, 4, 8, 16, 32, 64}})->Args({3, 27})->UseRealTime();
+BENCHMARK(BM_ContactLayerForces)->ArgsProduct({{2}, {2, 4, 8, 16, 32, 64}})->Args({3, 27})->UseRealTime();
 
 // --- whole steps: integrator x mesh size (icosphere levels 2..7), ball resting on a plane
 

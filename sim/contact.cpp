@@ -244,16 +244,34 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
 }
 
 void BodyContacts::updateTrees(const std::vector<Vec3>& x0, double dt) {
-  for (uint32_t b : active_) updateTree(b, x0, dt);
+  for (uint32_t b : active_) updateTree(b, x0, dt, false);
 }
 
-void BodyContacts::updateTree(uint32_t b, const std::vector<Vec3>& x0, double dt) {
+void BodyContacts::updateTree(uint32_t b, const std::vector<Vec3>& x0, double dt, bool onlyDirty) {
   const Model& model = *model_;
   const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
+  Body& body = bodies_[b];
+  const BodyInfo& info = model.bodies[b];
+  const double margin = 0.5 * body.thickness;
+  if (onlyDirty) {
+    for (uint32_t v = 0; v < info.vertexCount; ++v) {
+      const uint32_t i = info.firstVertex + v;
+      if (dirty_[i]) body.vertexTree.setBox(v, sweptBox(motion(i), margin));
+    }
+    body.vertexTree.refitNodes();
+    for (uint32_t k = 0; k < body.edges.size(); ++k) {
+      const auto& e = body.edges[k];
+      if (dirtyEdge(e)) body.edgeTree.setBox(k, sweptBox(motion(e[0]), motion(e[1]), margin));
+    }
+    body.edgeTree.refitNodes();
+    for (uint32_t f = 0; f < info.faceCount; ++f) {
+      const Triangle& t = model.faces[info.firstFace + f];
+      if (dirtyCorner(t)) body.faceTree.setBox(f, sweptBox(motion(t[0]), motion(t[1]), motion(t[2]), margin));
+    }
+    body.faceTree.refitNodes();
+    return;
+  }
   {
-    Body& body = bodies_[b];
-    const BodyInfo& info = model.bodies[b];
-    const double margin = 0.5 * body.thickness;
     const auto update = [&](Bvh& tree) {
       if (tree.primitiveCount() == 0) {
         tree.build(boxes_);
@@ -424,8 +442,16 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
       }
     }
   }
+  // Trees: a body's are exact for this search if they were for the last and it did not move
+  // since; else a near body's are updated: only the primitives whose paths changed when they
+  // were exact for the last search (dirty_), all of them otherwise.
+  ++search_;
   for (uint32_t b : active_) {
-    if (bodies_[b].near && !bodies_[b].fresh) updateTree(b, x0, dt), bodies_[b].fresh = true;
+    Body& body = bodies_[b];
+    if (!body.moved && body.fitted + 1 == search_) body.fitted = search_;
+    if (!body.near || body.fitted == search_) continue;
+    updateTree(b, x0, dt, body.fitted + 1 == search_);
+    body.fitted = search_;
   }
   // The pairs with a body that moved since the last pass (all on the first): a pair of two bodies
   // that did not has had every contact satisfied in that pass, or they would have moved.
@@ -527,7 +553,6 @@ void BodyContacts::markMoved() {
       touched_[i] = 0;
     }
     bodies_[b].moved = moved;
-    if (moved) bodies_[b].fresh = false;
   }
   full_ = false;
 }
@@ -557,7 +582,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
   // A state that is no longer finite has blown up: there is no contact to resolve, and the
   // monitor (sim/monitor.h) stops the run at its next check.
   if (!finite) return false;
-  for (uint32_t b : active_) bodies_[b].moved = true, bodies_[b].fresh = false;
+  for (uint32_t b : active_) bodies_[b].moved = true, bodies_[b].fitted = kNever;
   full_ = true;
   // 1. Impulses, pass after pass, until no contact needs one.
   bool any = false, settled = false;

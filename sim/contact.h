@@ -122,6 +122,7 @@ class BodyContacts {
     double friction;
     double restitution;
   };
+  static constexpr uint64_t kNever = UINT64_MAX - 1;  // a search number no search has (nor its successor)
   struct Body {
     double thickness = 0.0;
     double friction = 0.0;
@@ -132,7 +133,7 @@ class BodyContacts {
     Box box;            // the swept box of the whole body this pass
     bool near = false;  // near another body this pass, or self contact: its trees are refitted
     bool moved = true;  // its paths changed in the last pass (every body on the first)
-    bool fresh = false;                                       // its trees hold its current paths
+    uint64_t fitted = kNever;  // the search (search_) for which its trees were last exact
     std::vector<PrimitivePair> restVertexFace, restEdgeEdge;  // self pairs near at rest (sorted)
   };
   // A triangle collider's sharp edges and their corners (vertex indices from vertexCount_ on).
@@ -160,7 +161,8 @@ class BodyContacts {
   bool resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
   // Swept boxes of every primitive on the paths x0 -> x0 + dt u, and the trees refitted over them.
   void updateTrees(const std::vector<Vec3>& x0, double dt);
-  void updateTree(uint32_t body, const std::vector<Vec3>& x0, double dt);
+  // onlyDirty: the trees were exact for the last search, and only dirty_ primitives changed since.
+  void updateTree(uint32_t body, const std::vector<Vec3>& x0, double dt, bool onlyDirty);
   // Every contact on the current paths, in a fixed order; false on an overflow (out incomplete).
   bool findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* candidates);
   bool pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out,
@@ -190,6 +192,7 @@ class BodyContacts {
   std::vector<uint8_t> touched_;  // changed in the current pass (per vertex)
   std::vector<uint8_t> dirty_;    // changed in the pass before (per vertex; collider vertices never)
   bool full_ = true;              // this pass tests every candidate pair (the first of a step)
+  uint64_t search_ = 0;           // searches (findContacts) so far
   std::vector<uint32_t> hits_;    // a tree query's result
   bool dirtyEdge(const std::array<uint32_t, 2>& e) const { return dirty_[e[0]] || dirty_[e[1]]; }
   bool dirtyCorner(const Triangle& t) const { return dirty_[t[0]] || dirty_[t[1]] || dirty_[t[2]]; }

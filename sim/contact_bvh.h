@@ -68,12 +68,15 @@ class Bvh {
   uint32_t primitiveAt(uint32_t slot) const { return primitive_[slot]; }  // primitive in leaf slot
   const Box& boxAt(uint32_t slot) const { return box_[slot]; }            // its box
   const Box& boxOf(uint32_t primitive) const { return box_[slot_[primitive]]; }  // a primitive's box
+  // A new box for one primitive; the nodes above it are stale until refitNodes().
+  void setBox(uint32_t primitive, const Box& box) { box_[slot_[primitive]] = box; }
+  // Updates every node's bounds bottom-up from the primitives' boxes.
+  void refitNodes();
   // Appends every primitive whose box overlaps `box`, in the tree's leaf order.
   void query(const Box& box, std::vector<uint32_t>& out) const;
 
  private:
   double quality() const;  // sum of inner node surface areas / the root's
-  void refitNodes();
 
   std::vector<Node> nodes_;
   std::vector<uint32_t> primitive_;  // leaf order -> primitive index

@@ -121,6 +121,8 @@ class BodyContacts {
     double thickness;
     double friction;
     double restitution;
+    // One side is a static collider: no push inside the thickness (see impulse()).
+    bool still = false;
   };
   static constexpr uint64_t kNever = UINT64_MAX - 1;  // a search number no search has (nor its successor)
   struct Body {

@@ -50,14 +50,8 @@ int runFrames(const FramesOptions& options);
 // The stability advisor on a loaded scene. Warn: warns when the step exceeds the estimated
 // stable limit. AutoSubsteps (--substeps auto): sets scene.substeps to a safe number. Default
 // (neither the scene nor the command line gave dt or substeps): the same with the margin
-// kImpactMargin that holds through impacts (the estimate is made at rest). Both say what they chose.
-// Measured (docs/materials.md, scripts/step_margin.sh): the largest step that survives a whole
-// drop is 1.35-1.78 times the estimate for the body material's corpus, but 0.21 times it for the
-// element material's bunny_light (its landing crushes the ears' faces): a scene with an
-// element-material body gets the smaller margin.
+// margin that holds through impacts (impactMargin, sim/setup.h). Both say what they chose.
 enum class StepChoice { Warn, AutoSubsteps, Default };
-constexpr double kImpactMargin = 0.5;
-constexpr double kImpactMarginElement = 0.2;
 void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, std::ostream& log);
 
 struct SuggestOptions {

@@ -204,9 +204,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
                                           : std::string())
         << ")\n";
   } else if (choice == StepChoice::Default) {
-    const bool element = std::any_of(scene.bodies.begin(), scene.bodies.end(),
-                                     [](const BodyDesc& d) { return d.material == MaterialModel::Element; });
-    const double margin = element ? kImpactMarginElement : kImpactMargin;
+    const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
         << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << margin

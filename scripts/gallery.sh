@@ -17,6 +17,10 @@ declare -A times=(
   [bunny_light]=0,1.5,2.3,25
   [jelly]=0,1.45,1.8,12
   [sample]=0,2,4,27
+  [head_on]=0,0.45,0.6,3
+  [column]=0,0.8,1.6,5
+  [pile]=0,0.8,2,8
+  [stack]=0,0.6,1.5,8
 )
 for scene in "${!times[@]}"; do
   "$springy" frames "scenes/$scene.toml" -o "$out" --sheet-only --width 384 --height 216 \

@@ -1,10 +1,13 @@
 #include "sim/setup.h"
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "sim/error.h"
 #include "sim/intersections.h"
 #include "sim/mesh.h"
+#include "sim/stability.h"
 
 namespace springy {
 
@@ -81,6 +84,19 @@ Model buildModel(const SimulationDesc& scene) {
   const double dt = stepSize(scene);
   model.colliders.restingSpeed = scene.restingSpeed >= 0.0 ? scene.restingSpeed : 4.0 * length(scene.gravity) * dt;
   return model;
+}
+
+double impactMargin(const SimulationDesc& desc) {
+  const bool element = std::any_of(desc.bodies.begin(), desc.bodies.end(),
+                                   [](const BodyDesc& d) { return d.material == MaterialModel::Element; });
+  return element ? kImpactMarginElement : kImpactMargin;
+}
+
+double adviseSubsteps(SimulationDesc& desc) {
+  const Model model = buildModel(desc);
+  const StabilityReport r = estimateStability(model, model.restPosition, desc.integrator, desc.duration);
+  if (std::isfinite(r.dtMax) && r.dtMax > 0.0) desc.substeps = safeSubsteps(desc.dt, r.dtMax, impactMargin(desc));
+  return r.dtMax;
 }
 
 }  // namespace springy

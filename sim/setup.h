@@ -39,4 +39,18 @@ Model buildModel(const SimulationDesc& desc);
 // The step the world takes: dt / substeps.
 inline double stepSize(const SimulationDesc& desc) { return desc.dt / desc.substeps; }
 
+// The fraction of the stability advisor's estimated limit (sim/stability.h, made at rest) that a
+// scene giving no step is run at, a margin for impacts. Measured (docs/materials.md,
+// scripts/step_margin.sh): the largest step that survives a whole drop is 1.35-1.78 times the
+// estimate for the body material's corpus, but 0.21 times it for the element material's
+// bunny_light (its landing crushes the ears' faces): a scene with an element-material body gets
+// the smaller margin.
+constexpr double kImpactMargin = 0.5;
+constexpr double kImpactMarginElement = 0.2;
+double impactMargin(const SimulationDesc& desc);
+// Sets desc.substeps to the advisor's choice for a scene that gives no step (at most
+// impactMargin of the estimated stable limit); returns the limit (infinite: stable at any step,
+// desc unchanged).
+double adviseSubsteps(SimulationDesc& desc);
+
 }  // namespace springy

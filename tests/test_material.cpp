@@ -23,9 +23,6 @@
 namespace springy {
 namespace {
 
-// The default step's margin under the advisor's estimate (app/commands.h kImpactMargin).
-constexpr double kImpactMargin = 0.5;
-
 Model sphereModel(const TriMesh& mesh, double decay, double mass = 1.5) {
   BodyDesc desc;
   desc.name = "ball";

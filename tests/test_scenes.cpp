@@ -23,7 +23,14 @@ struct SceneRun {
   Monitor monitor;
   RestWatch rest;
   explicit SceneRun(const std::string& name)
-      : scene(loadScene(scenePath(name))), world(buildModel(scene), scene.integrator, stepSize(scene)), monitor(world) {}
+      : scene(advised(loadScene(scenePath(name)))),
+        world(buildModel(scene), scene.integrator, stepSize(scene)),
+        monitor(world) {}
+  // A scene that gives no step runs at the advisor's, as springy check and render run it.
+  static SceneDesc advised(SceneDesc scene) {
+    if (!scene.stepGiven) adviseSubsteps(scene);
+    return scene;
+  }
   // Advances to time t, checking stability at every frame (1/30 s); fails the test on a failure.
   void advance(double t, const std::function<void()>& perFrame = {}) {
     while (world.time() < t - 0.5 * world.dt()) {
@@ -231,6 +238,47 @@ TEST(Scenes, LightBunnyStaysStableAndKeepsItsShape) {
   EXPECT_EQ(run.world.model().bodies[0].vertexCount, 500u);
   run.advance(4.0);
   EXPECT_GT(run.body(0).volume / run.world.model().bodies[0].restVolume, 0.9);
+}
+
+// Twenty-four balls poured into the box: none leaves it (walls 1.4 m high), none passes
+// through another or through a wall's rim (the monitor's audit at every frame), and they heap
+// up: more balls than fit on the box's floor (4 x 2 of them) are held up by the others.
+TEST(Scenes, PileBallsHeapUpInTheBoxWithoutCrossing) {
+  SceneRun run("pile");
+  run.advance(2.5);
+  const uint32_t n = static_cast<uint32_t>(run.world.model().bodies.size());
+  ASSERT_EQ(n, 24u);
+  uint32_t raised = 0;
+  for (uint32_t b = 0; b < n; ++b) {
+    const Vec3 c = run.body(b).centroid;
+    EXPECT_LT(std::fabs(c.x), 1.0) << run.world.model().bodies[b].name;
+    EXPECT_LT(std::fabs(c.z), 0.7) << run.world.model().bodies[b].name;
+    if (run.lowest(b) > 0.1) ++raised;  // resting on other balls, not on the floor
+  }
+  EXPECT_GE(raised, 24u - 8u);
+  ASSERT_NE(run.world.bodyContacts(), nullptr);
+  EXPECT_GT(run.world.bodyContacts()->sinceStart().contacts, 0u);
+  EXPECT_EQ(run.world.bodyContacts()->sinceStart().overflows, 0u);
+}
+
+// The bunny lands on the bed of nine balls and is held up by them before it tumbles off; the
+// balls stay in the tray, and nothing passes through anything (the monitor's audit at every
+// frame).
+TEST(Scenes, StackBunnyLandsOnTheBedOfBallsWhichStaysInTheTray) {
+  SceneRun run("stack");
+  double held = 0.0;  // time the bunny spent low enough to touch the balls' tops, above the floor
+  run.advance(2.0, [&] {
+    const double low = run.lowest(0);
+    if (low < 0.7 && low > 0.3) held += 1.0 / 30.0;
+  });
+  EXPECT_GT(held, 0.3) << "the bunny was not held up by the balls";
+  for (uint32_t b = 1; b <= 9; ++b) {
+    const Vec3 c = run.body(b).centroid;
+    EXPECT_LT(std::max(std::fabs(c.x), std::fabs(c.z)), 0.95 - 0.25) << run.world.model().bodies[b].name;
+    EXPECT_LT(c.y, 0.35) << run.world.model().bodies[b].name << " was pushed out of the bed";
+  }
+  ASSERT_NE(run.world.bodyContacts(), nullptr);
+  EXPECT_GT(run.world.bodyContacts()->sinceStart().contacts, 0u);
 }
 
 }  // namespace

@@ -261,9 +261,8 @@ TEST(Scenes, PileBallsHeapUpInTheBoxWithoutCrossing) {
   EXPECT_EQ(run.world.bodyContacts()->sinceStart().overflows, 0u);
 }
 
-// The bunny lands on the bed of nine balls and is held up by them before it tumbles off; the
-// balls stay in the tray, and nothing passes through anything (the monitor's audit at every
-// frame).
+// The bunny lands on the bed of nine balls and is held up by them; the balls stay in the tray,
+// and nothing passes through anything (the monitor's audit at every frame).
 TEST(Scenes, StackBunnyLandsOnTheBedOfBallsWhichStaysInTheTray) {
   SceneRun run("stack");
   double held = 0.0;  // time the bunny spent low enough to touch the balls' tops, above the floor

@@ -245,7 +245,7 @@ TEST(Scenes, LightBunnyStaysStableAndKeepsItsShape) {
 // up: more balls than fit on the box's floor (4 x 2 of them) are held up by the others.
 TEST(Scenes, PileBallsHeapUpInTheBoxWithoutCrossing) {
   SceneRun run("pile");
-  run.advance(2.5);
+  run.advance(1.6);  // the last of them lands at about 1.2 s
   const uint32_t n = static_cast<uint32_t>(run.world.model().bodies.size());
   ASSERT_EQ(n, 24u);
   uint32_t raised = 0;
@@ -266,7 +266,7 @@ TEST(Scenes, PileBallsHeapUpInTheBoxWithoutCrossing) {
 TEST(Scenes, StackBunnyLandsOnTheBedOfBallsWhichStaysInTheTray) {
   SceneRun run("stack");
   double held = 0.0;  // time the bunny spent low enough to touch the balls' tops, above the floor
-  run.advance(2.0, [&] {
+  run.advance(1.5, [&] {  // it lands at about 0.5 s
     const double low = run.lowest(0);
     if (low < 0.7 && low > 0.3) held += 1.0 / 30.0;
   });

@@ -362,6 +362,53 @@ TEST(BodyContact, ABallRestingOnTwoPlateRimsStaysCalm) {
   EXPECT_LT(most, 3e-5) << "the ball on the rims vibrates";
 }
 
+// The fail-safe alone (no impulse passes): vertices in an approaching contact stop for the step,
+// so nothing crosses, and each group of stopped vertices shares its momentum, so the total is
+// kept.
+TEST(BodyContact, FailSafeAloneKeepsBodiesApartAndMomentum) {
+  World world(twoBalls(true), Integrator::RK4, kStep);
+  world.bodyContacts()->setImpulsePasses(0);
+  const Vec3 p0 = momentum(world);
+  uint64_t stopped = 0;
+  for (int s = 0; s < 1500; ++s) {
+    world.step();
+    stopped += world.bodyContacts()->lastStep().stopped;
+    if (s % 10 == 0) {
+      ASSERT_TRUE(findIntersections(world.model(), world.positions(), 1).empty()) << "crossed at step " << s;
+    }
+  }
+  EXPECT_GT(stopped, 0u);
+  const Vec3 p1 = momentum(world);
+  EXPECT_NEAR(p1.x, p0.x, 1e-9);
+  EXPECT_NEAR(p1.y, p0.y, 1e-9);
+  EXPECT_NEAR(p1.z, p0.z, 1e-9);
+}
+
+// Two balls side by side whose vertices fly about at 10 km/s (a blown-up state): every
+// primitive's swept box overlaps most of the other ball's. The search gives up after
+// kMaxCandidatesPerPrimitive candidates per primitive instead of testing them all (quadratic in
+// the bodies' size), counts the overflow, and the monitor stops the run naming it.
+TEST(BodyContact, AnOverflowingSearchIsReportedNotSkippedSilently) {
+  Model model;
+  model.gravity = {};
+  addBody(model, ball("a", {-0.55, 0.0, 0.0}, {}));
+  addBody(model, ball("b", {0.55, 0.0, 0.0}, {}));
+  uint64_t state = 12345;
+  const auto next = [&] {  // a fixed sequence in [-1, 1)
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<double>(state >> 11) * 0x1.0p-52 - 1.0;
+  };
+  for (Vec3& v : model.initialVelocity) v = Vec3{next(), next(), next()} * 1e4;
+  World world(std::move(model), Integrator::SymplecticEuler, kStep);
+  Monitor monitor(world);
+  world.step();
+  EXPECT_EQ(world.bodyContacts()->lastStep().overflows, 1u);
+  const std::optional<Failure> failure = monitor.check(world);
+  ASSERT_TRUE(failure.has_value());
+  EXPECT_NE(failure->message.find("contact search"), std::string::npos) << failure->message;
+  EXPECT_NE(failure->message.find("'b'"), std::string::npos) << failure->message;
+}
+
 // A scene whose bodies start crossing is refused at load, naming both bodies and their faces.
 TEST(BodyContact, BodiesThatStartCrossingAreRefused) {
   SimulationDesc desc;

@@ -17,6 +17,8 @@ declare -A times=(
   [bunny_light]=0,1.5,2.3,25
   [jelly]=0,1.45,1.8,12
   [sample]=0,2,4,27
+  [drape]=0.3,0.5,1.2,4
+  [flag]=1,4,16,20
 )
 for scene in "${!times[@]}"; do
   "$springy" frames "scenes/$scene.toml" -o "$out" --sheet-only --width 384 --height 216 \

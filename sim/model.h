@@ -78,7 +78,8 @@ constexpr double kDefaultDeformationDecay = 0.1;  // [s]
 // the period, a membrane a quarter as stiff: a 1 m cloth hung by two corners stretches 0.3% on
 // average, 4% at the corners (tests/test_cloth.cpp), and the stable step is twice as long. Bend:
 // 70 times the period, 5000 times softer: a 1.5 m square's bending length (D / (rho g))^(1/3)
-// is 6.6 cm (a heavy fabric; the body default's, 1.1 m, is a sheet of cardboard).
+// is 6.6 cm (a heavy fabric; the body default's, 1.1 m, is a sheet of cardboard). Stiffer (a
+// shorter bend_period) for a flag that flaps without self contact (scenes/flag.toml).
 constexpr double kClothStretchPeriod = 0.1;  // [s] for L = 1 m
 constexpr double kClothBendPeriod = 50.0;    // [s] for L = 1 m
 

@@ -100,10 +100,16 @@ int runCheck(const CheckOptions& options) {
     for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
       const BodyRecord& r = monitor.records()[b];
       const BodyInfo& info = world.model().bodies[b];
-      std::printf("  %-16s %9llu %8.3f %8.3f %10.4f %10.2e %9.3f %10.3f %10.4g %10.4g %10.4g %s\n", info.name.c_str(),
-                  static_cast<unsigned long long>(world.stepCount()), world.time(), wall, r.maxStrain,
-                  r.maxPenetration, r.minVolumeRatio, r.last.volume / info.restVolume, r.last.kinetic,
-                  r.last.gravitational, r.last.elastic, rest.atRest(info) ? "yes" : "no");
+      // An open surface (a cloth) encloses no volume: "-".
+      char volumeMin[32] = "-", volumeEnd[32] = "-";
+      if (info.restVolume > 0.0) {
+        std::snprintf(volumeMin, sizeof volumeMin, "%.3f", r.minVolumeRatio);
+        std::snprintf(volumeEnd, sizeof volumeEnd, "%.3f", r.last.volume / info.restVolume);
+      }
+      std::printf("  %-16s %9llu %8.3f %8.3f %10.4f %10.2e %9s %10s %10.4g %10.4g %10.4g %s\n", info.name.c_str(),
+                  static_cast<unsigned long long>(world.stepCount()), world.time(), wall, r.maxStrain, r.maxPenetration,
+                  volumeMin, volumeEnd, r.last.kinetic, r.last.gravitational, r.last.elastic,
+                  rest.atRest(info) ? "yes" : "no");
       if (monitor.energyChecked()) {
         std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
                     r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
@@ -135,6 +141,7 @@ int runCheck(const CheckOptions& options) {
     if (!failure && options.endVolume > 0.0) {
       for (uint32_t b = 0; b < world.model().bodies.size() && !failure; ++b) {
         const BodyInfo& info = world.model().bodies[b];
+        if (!(info.restVolume > 0.0)) continue;  // an open surface: no volume to keep
         const double ratio = monitor.records()[b].last.volume / info.restVolume;
         if (ratio < options.endVolume) {
           char what[256];

@@ -437,8 +437,13 @@ struct Renderer::Impl {
   // drawn without them, then again with them inside the screen rectangle around that
   // footprint (the same vertices and depths: LEQUAL passes exactly where it was drawn); the
   // image is the same.
+  //
+  // A ground is pushed back in depth by a little (polygon offset): a cloth lying on the ground
+  // (its vertices on the plane, y = 0) would otherwise fight it for every pixel.
   void groundPass(bool shadowsOn) {
     if (grounds.empty()) return;
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.0f, 4.0f);
     for (const GpuMesh* g : grounds) {
       const std::optional<glm::ivec4> rect =
           shadowsOn ? shadowFootprint(g->groundOrigin, g->groundU, g->groundV, light.direction, frameUniforms.lightVP,
@@ -455,6 +460,7 @@ struct Renderer::Impl {
       drawMesh(true, *g);
       glDisable(GL_SCISSOR_TEST);
     }
+    glDisable(GL_POLYGON_OFFSET_FILL);
     mark(RenderPass::Ground);
   }
 

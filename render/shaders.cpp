@@ -13,11 +13,15 @@ uniform float uNormalOffset;
 out vec3 vPos;
 out vec3 vNormal;
 out vec4 vLightPos;
+out vec4 vLightPosBack;
 void main() {
   vPos = aPos;
   vNormal = aNormal;
-  // Normal offset: look the shadow map up slightly off the surface (less acne).
+  // Normal offset: look the shadow map up slightly off the surface (less acne), on the side
+  // being shaded: the front's (along the normal) or, for a back face, the back's. A cloth lit
+  // from behind would otherwise look its shadow up inside its own shadow, in stripes.
   vLightPos = uLightViewProj * vec4(aPos + aNormal * uNormalOffset, 1.0);
+  vLightPosBack = uLightViewProj * vec4(aPos - aNormal * uNormalOffset, 1.0);
   gl_Position = uViewProj * vec4(aPos, 1.0);
 }
 )";
@@ -30,6 +34,7 @@ constexpr const char* kMeshFsBody = R"(
 in vec3 vPos;
 in vec3 vNormal;
 in vec4 vLightPos;
+in vec4 vLightPosBack;
 uniform vec3 uAlbedo;       // linear colour (ground: colour A)
 uniform float uAlpha;
 uniform float uShininess;
@@ -55,7 +60,8 @@ vec3 toDisplay(vec3 c) { return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2)); }
 
 #if SHADOWS
 float shadowFactor() {
-  vec3 p = vLightPos.xyz / vLightPos.w * 0.5 + 0.5;
+  vec4 lightPos = gl_FrontFacing ? vLightPos : vLightPosBack;
+  vec3 p = lightPos.xyz / lightPos.w * 0.5 + 0.5;
   if (p.x <= 0.0 || p.x >= 1.0 || p.y <= 0.0 || p.y >= 1.0) return 1.0;
   p.z = min(p.z, 1.0);  // receivers beyond the far plane compare as "far"
   // 4 bilinear (hardware 2x2) comparisons = smooth 4x4-texel penumbra.

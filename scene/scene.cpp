@@ -235,7 +235,63 @@ const toml::array* arrayOfTables(const toml::table& root, std::string_view key, 
   return a;
 }
 
-// Pin rules a user can write without knowing vertex indices.
+// Pin rules a user can write without knowing vertex indices: a side of the body's bounding box,
+// the axis (x 0, y 1, z 2) and whether it is the high end.
+struct SideRule {
+  const char* name;
+  int axis;
+  bool highest;
+};
+constexpr SideRule kSideRules[] = {{"top", 1, true},   {"bottom", 1, false}, {"right", 0, true},
+                                   {"left", 0, false}, {"front", 2, false},  {"back", 2, true}};
+constexpr const char* kSideRuleNames = "top, bottom, left, right, front, back";
+
+const SideRule* findSideRule(const std::string& name) {
+  for (const SideRule& rule : kSideRules) {
+    if (name == rule.name) return &rule;
+  }
+  return nullptr;
+}
+
+// Two positive numbers [a, b], or one number for both.
+std::array<double, 2> positivePair(Reader& r, std::string_view key, std::array<double, 2> fallback) {
+  const toml::node* n = r.get(key);
+  if (!n) return fallback;
+  std::array<double, 2> out{};
+  if (n->is_number()) {
+    out[0] = out[1] = r.asNumber(*n, key);
+  } else {
+    const auto* a = n->as_array();
+    if (!a || a->size() != 2) r.fail(*n, key, "must be a number or an array of two numbers [a, b]");
+    out = {r.asNumber(*a->get(0), key), r.asNumber(*a->get(1), key)};
+  }
+  if (!(out[0] > 0.0 && out[1] > 0.0)) r.fail(*n, key, "must be positive");
+  return out;
+}
+
+// Two integers [a, b] in [lo, hi], or one for both.
+std::array<int, 2> integerPair(Reader& r, std::string_view key, std::array<int, 2> fallback, int lo, int hi) {
+  const toml::node* n = r.get(key);
+  if (!n) return fallback;
+  const auto* a = n->as_array();
+  if (!n->is_integer() && (!a || a->size() != 2)) {
+    r.fail(*n, key, "must be an integer or an array of two integers [a, b]");
+  }
+  std::array<int, 2> out{};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const toml::node& item = a ? *a->get(k) : *n;
+    const auto* v = item.as_integer();
+    if (!v) r.fail(item, key, "must be an integer or an array of two integers [a, b]");
+    if (v->get() < lo || v->get() > hi) {
+      r.fail(
+          item, key,
+          "must be between " + std::to_string(lo) + " and " + std::to_string(hi) + ", got " + std::to_string(v->get()));
+    }
+    out[k] = static_cast<int>(v->get());
+  }
+  return out;
+}
+
 uint32_t extremeVertex(const TriMesh& mesh, int axis, bool highest) {
   uint32_t best = 0;
   for (uint32_t i = 1; i < mesh.positions.size(); ++i) {
@@ -250,8 +306,14 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   BodyDesc b;
   b.source = location(path, table.source()) + ": [[body]] #" + std::to_string(index + 1);
   b.name = r.string("name", "body " + std::to_string(index + 1));
-  const std::string shape = r.choice("shape", "octahedron_sphere",
-                                     {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mesh"});
+  const std::string shape =
+      r.choice("shape", "octahedron_sphere",
+               {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mesh", "cloth"});
+  // cloth = true: an open surface, simulated as it is (docs/model.md §18); the cloth shape is one.
+  b.cloth = r.boolean("cloth", shape == "cloth");
+  if (shape == "cloth" && !b.cloth) {
+    r.fail(*r.get("cloth"), "cloth", "shape = \"cloth\" is an open surface: it is always cloth = true");
+  }
   // Shape parameters: each shape reads only its own keys; the others are then unknown keys.
   TriMesh mesh;
   try {
@@ -266,20 +328,35 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
     } else if (shape == "jelly") {
       mesh = makeJelly(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("ridges", 8, 0, 64),
                        r.integer("rings", 10, 2, 200), r.integer("segments", 48, 3, 1000));
+    } else if (shape == "cloth") {
+      const std::array<double, 2> size = positivePair(r, "size", {1.0, 1.0});
+      const std::array<int, 2> resolution = integerPair(r, "resolution", {20, 20}, 1, kMaxClothResolution);
+      mesh = makeCloth(size[0], size[1], resolution[0], resolution[1]);
     } else {
       const toml::node* n = r.get("mesh");
       if (!n || !n->is_string()) r.failHere("shape = \"mesh\" needs mesh = \"FILE\" (relative to the scene file)");
       const std::string file = resolvePath(path, n->as_string()->get());
-      const std::string proxy = r.choice("proxy", "auto", {"auto", "none", "always"});
+      const std::string proxy = r.choice("proxy", b.cloth ? "none" : "auto", {"auto", "none", "always"});
       const int proxyVertices = r.integer("proxy_vertices", 0, 4, kMaxProxyVertices);
+      if (b.cloth && proxy != "none") {
+        r.fail(*r.get("proxy"), "proxy", "cloth = true simulates the mesh as it is, never through a proxy");
+      }
+      if (b.cloth && r.has("proxy_vertices")) {
+        r.fail(*r.get("proxy_vertices"), "proxy_vertices",
+               "cloth = true simulates the mesh as it is, never through a proxy");
+      }
       try {
         mesh = readWeldedMesh(file);
         // auto: a mesh that is not a closed manifold, or is badly shaped or far finer than a
         // body needs, is simulated through a proxy that wraps it (sim/proxy.h).
         std::optional<std::string> reason;
-        if (proxy == "auto") reason = needsProxy(mesh, kProxyAutoMaxVertices);
+        if (proxy == "auto" && !b.cloth) reason = needsProxy(mesh, kProxyAutoMaxVertices);
         if (proxy == "always") reason = "proxy = \"always\"";
-        if (reason) {
+        if (b.cloth) {
+          // The mesh as it is, an open surface: validated (one piece, every edge in one or two
+          // consistently oriented triangles, no zero-area triangle), never wrapped.
+          finishClothMesh(mesh, file);
+        } else if (reason) {
           ProxyOptions options;
           options.targetVertices = proxyVertices > 0
                                        ? static_cast<std::size_t>(proxyVertices)
@@ -297,6 +374,10 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
       if (const toml::node* s = r.get("simplify")) {
         const auto* target = s->as_integer();
         if (!target || target->get() < 4) r.fail(*s, "simplify", "must be a vertex count of at least 4");
+        if (b.cloth) {
+          r.fail(*s, "simplify",
+                 "simplifies closed meshes only; with cloth = true, give the mesh at the resolution to simulate");
+        }
         mesh = simplifyMesh(mesh, static_cast<std::size_t>(target->get()));
       }
     }
@@ -382,10 +463,12 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.contactFriction = r.inRange("contact_friction", b.contactFriction, 0.0, 10.0);
   b.contactRestitution = r.inRange("contact_restitution", b.contactRestitution, 0.0, 1.0);
   // Pins: vertex indices or rules ("top", "bottom", "left", "right", "front", "back": the
-  // extreme vertex along y, x or z), and pin_near = [[x, y, z], ...]: the nearest vertex.
+  // extreme vertex along y, x or z; "all": every vertex), pin_side (every vertex on a side of
+  // the bounding box) and pin_near = [[x, y, z], ...]: the nearest vertex.
   // Each rule's vertex is found once however often it is named (a scan of every vertex per pin
   // made 16 KB of rules take seconds on a fine sphere: found by the fuzzer).
   std::array<std::optional<uint32_t>, 6> ruleVertex;
+  bool pinnedAll = false;
   if (const toml::node* n = r.get("pin")) {
     const auto* a = n->as_array();
     if (!a) r.fail(*n, "pin", "must be an array of vertex indices or rules, e.g. [\"top\"] or [0, 5]");
@@ -398,17 +481,51 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
         }
         b.pinned.push_back(static_cast<uint32_t>(i->get()));
       } else if (const auto* s = item.as_string()) {
-        static const std::vector<std::pair<std::string, std::pair<int, bool>>> rules = {
-            {"top", {1, true}},   {"bottom", {1, false}}, {"right", {0, true}},
-            {"left", {0, false}}, {"front", {2, false}},  {"back", {2, true}}};
-        auto it = std::find_if(rules.begin(), rules.end(), [&](auto& rule) { return rule.first == s->get(); });
-        if (it == rules.end())
-          r.fail(item, "pin", "unknown rule '" + s->get() + "' (top, bottom, left, right, front, back)");
-        std::optional<uint32_t>& v = ruleVertex[static_cast<std::size_t>(it - rules.begin())];
-        if (!v) v = extremeVertex(b.mesh, it->second.first, it->second.second);
+        if (s->get() == "all") {  // every vertex: a static body that still takes part in contact
+          if (!pinnedAll) {
+            for (uint32_t v = 0; v < b.mesh.positions.size(); ++v) b.pinned.push_back(v);
+          }
+          pinnedAll = true;
+          continue;
+        }
+        const SideRule* rule = findSideRule(s->get());
+        if (!rule) r.fail(item, "pin", "unknown rule '" + s->get() + "' (" + kSideRuleNames + ", all)");
+        std::optional<uint32_t>& v = ruleVertex[static_cast<std::size_t>(rule - kSideRules)];
+        if (!v) v = extremeVertex(b.mesh, rule->axis, rule->highest);
         b.pinned.push_back(*v);
       } else {
         r.fail(item, "pin", "entries must be vertex indices or rule names");
+      }
+    }
+  }
+  // pin_side = "left" or ["left", "top", ...]: every vertex on that side of the body's bounding
+  // box (within 1e-6 of its diagonal), e.g. the whole edge of a flag along its pole. Each side
+  // once however often it is named.
+  if (const toml::node* n = r.get("pin_side")) {
+    const auto* a = n->as_array();
+    if (!a && !n->is_string())
+      r.fail(*n, "pin_side", "must be a side or an array of sides, e.g. \"left\" or [\"left\", \"top\"]");
+    std::array<bool, std::size(kSideRules)> named{};
+    auto name = [&](const toml::node& item) {
+      const auto* s = item.as_string();
+      if (!s) r.fail(item, "pin_side", std::string("entries must be sides (") + kSideRuleNames + ")");
+      const SideRule* rule = findSideRule(s->get());
+      if (!rule) r.fail(item, "pin_side", "unknown side '" + s->get() + "' (" + kSideRuleNames + ")");
+      named[static_cast<std::size_t>(rule - kSideRules)] = true;
+    };
+    if (a) {
+      for (const toml::node& item : *a) name(item);
+    } else {
+      name(*n);
+    }
+    const std::vector<Vec3>& x = b.mesh.positions;
+    const double tolerance = 1e-6 * length(boundsOf(x).size());
+    for (std::size_t k = 0; k < named.size(); ++k) {
+      if (!named[k]) continue;
+      const SideRule& rule = kSideRules[k];
+      const double extreme = x[extremeVertex(b.mesh, rule.axis, rule.highest)][rule.axis];
+      for (uint32_t i = 0; i < x.size(); ++i) {
+        if (std::fabs(x[i][rule.axis] - extreme) <= tolerance) b.pinned.push_back(i);
       }
     }
   }

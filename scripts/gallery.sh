@@ -21,6 +21,8 @@ declare -A times=(
   [column]=0,0.8,1.6,5
   [pile]=0,0.8,2,8
   [stack]=0,0.6,1.5,8
+  [drape]=0.3,0.5,1.2,4
+  [flag]=1,4,16,20
 )
 for scene in "${!times[@]}"; do
   "$springy" frames "scenes/$scene.toml" -o "$out" --sheet-only --width 384 --height 216 \

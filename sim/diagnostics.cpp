@@ -124,7 +124,7 @@ BodyMeasures measureBody(const World& world, uint32_t body) {
   m.size = length(b.size());
   double six = 0.0;
   for (double c : chunkSum) six += c;
-  m.volume = six / 6.0;
+  m.volume = info.open ? 0.0 : six / 6.0;  // an open surface encloses none
   m.elastic += gasEnergy(info, m.volume);
   return m;
 }

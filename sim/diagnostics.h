@@ -17,7 +17,7 @@ struct BodyMeasures {
   double kinetic = 0.0;     // [J]
   double gravitational = 0.0;  // -sum m g . x [J] (zero at the origin)
   double elastic = 0.0;     // struts + hinges + enclosed gas [J]
-  double volume = 0.0;      // [m^3]
+  double volume = 0.0;      // [m^3]; 0 for an open surface (BodyInfo::open)
   double size = 0.0;        // bounding-box diagonal [m]
   double maxStrain = 0.0;   // max |l - l0| / l0 over struts
   double penetration = 0.0; // deepest vertex behind a plane collider [m]

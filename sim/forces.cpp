@@ -7,13 +7,15 @@
 namespace springy {
 namespace {
 
-// The wind's force on each corner of face t; false for a leeward or degenerate face.
-inline bool windForce(const Triangle& t, double c, const Vec3& air, const Vec3* x, const Vec3* v,
+// The wind's force on each corner of face t; false for a leeward or degenerate face. A face of
+// an open surface (a cloth) has no leeward side: the wind meets whichever side faces it, and
+// c A ((w - v) . n) n is the same for n and -n.
+inline bool windForce(const Triangle& t, double c, const Vec3& air, const Vec3* x, const Vec3* v, bool twoSided,
                       Vec3& force) {
   const Vec3 areaNormal = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]) * 0.5;  // |.| = area
   const Vec3 relative = air - (v[t[0]] + v[t[1]] + v[t[2]]) / 3.0;
   const double flux = dot(relative, areaNormal);  // = A (w - v) . n
-  if (flux >= 0.0) return false;                   // leeward face
+  if (twoSided ? flux == 0.0 : flux >= 0.0) return false;  // leeward face (or edge-on)
   const double area = length(areaNormal);
   if (!(area > 0.0)) return false;
   force = areaNormal * (c * flux / area / 3.0);  // c A ((w - v) . n) n / 3
@@ -36,7 +38,7 @@ void applyWindPressure(const Model& model, Elements faces, const Vec3& air, cons
     Vec3 force;
     for (std::size_t r = 0; r < count; ++r) {
       const Triangle& t = model.faces[indexOf(r)];
-      if (!windForce(t, c, air, x, v, force)) continue;
+      if (!windForce(t, c, air, x, v, model.bodies[model.body[t[0]]].open, force)) continue;
       const uint32_t mask = maskOf(r);
       for (int i = 0; i < 3; ++i) {
         if (mask & (1u << i)) f[t[i]] += force;

@@ -28,6 +28,7 @@ constexpr double kMaxSteps = 1e9;                           // steps in one run 
 constexpr int kMaxSubsteps = 100000;
 constexpr int kMaxProxyVertices = 1 << 16;                  // proxy_vertices (1 << 20 took 204 s to build)
 constexpr std::size_t kMaxPinNear = 256;                    // pin_near points per body
+constexpr int kMaxClothResolution = 512;                    // shape = "cloth": quads per side
 // proxy = "auto" wraps a mesh of more vertices than this (far finer than a body needs).
 constexpr std::size_t kProxyAutoMaxVertices = 20000;
 // A proxy's default vertex count is the input's, clamped to 162 .. this (the body material behaves

@@ -516,7 +516,7 @@ TriMesh weldVertices(const TriMesh& mesh, double tolerance) {
   return out;
 }
 
-std::optional<std::string> findManifoldProblem(const TriMesh& mesh) {
+std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surface) {
   const std::vector<Vec3>& pos = mesh.positions;
   const std::vector<Triangle>& tris = mesh.triangles;
   const auto vertexCount = static_cast<uint32_t>(pos.size());
@@ -591,12 +591,13 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh) {
     }
   }
   for (const EdgeGroup& g : groups) {
-    if (g.end - g.begin == 1) {
+    if (g.end - g.begin == 1 && surface == Surface::Closed) {
       const HalfEdge& e = halfEdges[g.begin];
       return "edge " + edgeText(e.lo, e.hi) + " belongs to 1 triangle: the mesh has a hole";
     }
   }
   for (const EdgeGroup& g : groups) {
+    if (g.end - g.begin == 1) continue;  // a border edge (Surface::Open)
     const HalfEdge& e0 = halfEdges[g.begin];
     const HalfEdge& e1 = halfEdges[g.begin + 1];
     if (e0.from == e1.from) {
@@ -606,9 +607,11 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh) {
     }
   }
 
-  // Every edge is now shared by two opposite triangles, yet a vertex can still join two or more
-  // separate fans (two cones touching at their tips). Around vertex v, each triangle (v, a, b)
-  // contributes the link step a -> b; a manifold vertex's steps form exactly one cycle.
+  // Every edge is now shared by two opposite triangles (or, open, is a border edge), yet a vertex
+  // can still join two or more separate fans (two cones touching at their tips). Around vertex
+  // v, each triangle (v, a, b) contributes the link step a -> b; a manifold vertex's steps form
+  // exactly one cycle, or on an open surface's border one path. (Each a starts at most one step
+  // and each b ends at most one, by the checks above, so the steps form paths and cycles.)
   {
     // Link steps grouped by vertex, sorted by `a` so the successor of a is found by binary search.
     std::vector<std::array<uint32_t, 3>> steps;  // (v, a, b)
@@ -618,6 +621,7 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh) {
     }
     std::sort(steps.begin(), steps.end());
     std::vector<bool> visited(steps.size(), false);
+    std::vector<uint32_t> ends;  // Surface::Open: the b of one vertex's steps, sorted
     for (std::size_t begin = 0; begin < steps.size();) {
       std::size_t end = begin + 1;
       while (end < steps.size() && steps[end][0] == steps[begin][0]) ++end;
@@ -635,6 +639,18 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh) {
         }
       };
       std::size_t fans = 0;
+      if (surface == Surface::Open) {
+        // Paths first, each from its first step (one whose a no step ends at), so that a path is
+        // walked whole; what is left is cycles. On a closed surface there are no paths.
+        ends.clear();
+        for (std::size_t i = begin; i < end; ++i) ends.push_back(steps[i][2]);
+        std::sort(ends.begin(), ends.end());
+        for (std::size_t i = begin; i < end; ++i) {
+          if (visited[i] || std::binary_search(ends.begin(), ends.end(), steps[i][1])) continue;
+          ++fans;
+          walk(i);
+        }
+      }
       for (std::size_t i = begin; i < end; ++i) {
         if (visited[i]) continue;
         ++fans;
@@ -730,6 +746,10 @@ void finishClosedMesh(TriMesh& mesh, const std::string& path) {
   if (centredVolume(mesh) <= kZeroVolumeFactor * diagonal * diagonal * diagonal) {
     throw Error(path + ": the mesh encloses no volume");
   }
+}
+
+void finishClothMesh(const TriMesh& mesh, const std::string& path) {
+  if (auto problem = findManifoldProblem(mesh, Surface::Open)) throw Error(path + ": " + *problem);
 }
 
 TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance) {

@@ -41,7 +41,13 @@ TriMesh weldVertices(const TriMesh& mesh, double tolerance);
 // Checks run in this order: non-finite coordinate, index out of range, zero area (below 1e-12 x
 // bounding-box diagonal squared, or repeated corner), unused vertex, non-manifold edge, hole,
 // flipped face, non-manifold vertex, separate pieces. Self-intersection is not checked.
-std::optional<std::string> findManifoldProblem(const TriMesh& mesh);
+//
+// Surface::Open (a cloth) allows border edges (an edge of one triangle) and asks the rest: a
+// single consistently oriented 2-manifold with boundary, each edge in one or two triangles (two
+// traversing it in opposite directions), each vertex's triangles one fan (a disc, or a half disc
+// on the border; two fans meeting at a vertex is "non-manifold vertex"), one piece.
+enum class Surface { Closed, Open };
+std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surface = Surface::Closed);
 
 // A vertex far away from the rest (an edge over a million times longer than the median edge):
 // one such vertex sets the bounding box that welding and the zero-area test measure against, and
@@ -59,6 +65,11 @@ TriMesh readWeldedMesh(const std::string& path, double relativeWeldTolerance = 1
 // Validation (findManifoldProblem) + orientOutward + a positive enclosed volume, on a welded
 // mesh read from `path`. Throws springy::Error "PATH: <problem>" when it is not usable as a body.
 void finishClosedMesh(TriMesh& mesh, const std::string& path);
+
+// Validation as an open surface (findManifoldProblem with Surface::Open), for a mesh simulated
+// as cloth as it is: its orientation is kept (an open surface has no outside). Throws
+// springy::Error "PATH: <problem>" naming the bad edge, vertex or triangle.
+void finishClothMesh(const TriMesh& mesh, const std::string& path);
 
 // readWeldedMesh + finishClosedMesh.
 TriMesh loadClosedMesh(const std::string& path, double relativeWeldTolerance = 1e-6);

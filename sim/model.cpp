@@ -109,10 +109,16 @@ std::vector<double> angleWeightedAreas(const TriMesh& mesh) {
 void addBody(Model& model, const BodyDesc& desc) {
   const TriMesh& mesh = desc.mesh;
   const std::size_t nv = mesh.positions.size();
-  if (nv < 4 || mesh.triangles.size() < 4) {
-    throw Error(where(desc) + ": a closed body needs at least 4 vertices and 4 triangles");
+  if (desc.cloth ? mesh.triangles.empty() : (nv < 4 || mesh.triangles.size() < 4)) {
+    throw Error(where(desc) + (desc.cloth ? ": a cloth needs at least one triangle"
+                                          : ": a closed body needs at least 4 vertices and 4 triangles"));
   }
   if (!(desc.mass > 0.0) || !std::isfinite(desc.mass)) throw Error(where(desc) + ": mass must be positive");
+  if (desc.cloth && desc.volumePeriod > 0.0) {
+    throw Error(where(desc) +
+                ": volume_period (a gas) needs a closed body, but it is a cloth: an open surface "
+                "encloses no volume");
+  }
   const double size = length(boundsOf(mesh.positions).size());
 
   // Validate the geometry the forces divide by: edges and faces.
@@ -140,7 +146,6 @@ void addBody(Model& model, const BodyDesc& desc) {
   info.firstFace = static_cast<uint32_t>(model.faces.size());
   info.faceCount = static_cast<uint32_t>(mesh.triangles.size());
   info.mass = desc.mass;
-  info.restVolume = signedVolume(mesh.positions, mesh.triangles);
   info.restSize = size;
   info.contact = desc.contact;
   info.selfContact = desc.selfContact;
@@ -193,6 +198,20 @@ void addBody(Model& model, const BodyDesc& desc) {
     return a;
   };
 
+  // An open surface (a cloth, docs/model.md §18): marked so, or with a border edge (an edge of
+  // one triangle, no twin). It encloses no volume.
+  info.open = desc.cloth;
+  for (std::size_t k = 0; k < edges.size() && !info.open; ++k) {
+    if (!findEdge(edges[k].to, edges[k].from)) {
+      if (desc.volumePeriod > 0.0) {
+        throw Error(where(desc) + ": volume_period needs a closed mesh, but edge (" + std::to_string(edges[k].from) +
+                    ", " + std::to_string(edges[k].to) + ") borders only triangle " + std::to_string(edges[k].face));
+      }
+      info.open = true;
+    }
+  }
+  info.restVolume = info.open ? 0.0 : signedVolume(mesh.positions, mesh.triangles);
+
   // The body material (MaterialModel::Body): moduli from the periods at the body's size.
   const bool bodyMaterial = desc.material == MaterialModel::Body;
   if (bodyMaterial && desc.model == SpringModel::AllPairs) {
@@ -207,8 +226,9 @@ void addBody(Model& model, const BodyDesc& desc) {
   }
   if (bodyMaterial) {
     const double density = desc.mass / area, scale = std::sqrt(area / (4 * kPi));
-    const double stretch = desc.stretchPeriod.value_or(kDefaultStretchPeriod * scale);
-    const double bend = desc.bendPeriod.value_or(kDefaultBendPeriod * scale);
+    const double stretch =
+        desc.stretchPeriod.value_or((info.open ? kClothStretchPeriod : kDefaultStretchPeriod) * scale);
+    const double bend = desc.bendPeriod.value_or((info.open ? kClothBendPeriod : kDefaultBendPeriod) * scale);
     info.stretchPeriod = stretch;
     info.bendPeriod = bend;
     info.membraneModulus = density * scale * scale * (2 * kPi / stretch) * (2 * kPi / stretch);
@@ -253,10 +273,6 @@ void addBody(Model& model, const BodyDesc& desc) {
       // Each undirected edge once: at its direction with from < to, or at the only direction
       // it has (a border edge of an open mesh).
       const DirectedEdge* twin = findEdge(e.to, e.from);
-      if (!twin && desc.volumePeriod > 0.0) {
-        throw Error(where(desc) + ": volume_period needs a closed mesh, but edge (" + std::to_string(e.from) + ", " +
-                    std::to_string(e.to) + ") borders only triangle " + std::to_string(e.face));
-      }
       if (e.from > e.to && twin) continue;
       addStrut(e.from, e.to, e.face, twin ? twin->face : e.face);
       if (!useHinges || !twin) continue;

@@ -74,6 +74,14 @@ enum class MaterialModel {
 constexpr double kDefaultStretchPeriod = 0.05;    // [s] for L = 1 m
 constexpr double kDefaultBendPeriod = 0.7;        // [s] for L = 1 m
 constexpr double kDefaultDeformationDecay = 0.1;  // [s]
+// An open surface's (a cloth's) defaults, also for L = 1 m (docs/model.md §18). Stretch: twice
+// the period, a membrane a quarter as stiff: a 1 m cloth hung by two corners stretches 0.3% on
+// average, 4% at the corners (tests/test_cloth.cpp), and the stable step is twice as long. Bend:
+// 70 times the period, 5000 times softer: a 1.5 m square's bending length (D / (rho g))^(1/3)
+// is 6.6 cm (a heavy fabric; the body default's, 1.1 m, is a sheet of cardboard). Stiffer (a
+// shorter bend_period) for a flag that flaps without self contact (scenes/flag.toml).
+constexpr double kClothStretchPeriod = 0.1;  // [s] for L = 1 m
+constexpr double kClothBendPeriod = 50.0;    // [s] for L = 1 m
 
 // The user's description of one soft body, after its shape has been generated or loaded.
 struct BodyDesc {
@@ -85,6 +93,10 @@ struct BodyDesc {
   TriMesh drawMesh;
   Embedding drawBinding;
   TriMesh mesh;  // rest shape, already scaled, rotated and placed in the world
+  // An open surface (a cloth, docs/model.md §18): the mesh may have border edges (they get struts,
+  // no hinges); the body has no volume (no gas, no volume checks) and the cloth's material
+  // defaults. A mesh with border edges is an open surface whether or not this is set.
+  bool cloth = false;
   Vec3 velocity;  // initial velocity of every vertex [m/s]
   Vec3 angularVelocity;  // initial spin about the centroid [rad/s]
   SpringModel model = SpringModel::Springy;
@@ -121,7 +133,10 @@ struct BodyInfo {
   uint32_t firstHinge = 0, hingeCount = 0;
   uint32_t firstFace = 0, faceCount = 0;
   double mass = 0.0;        // [kg]
-  double restVolume = 0.0;  // [m^3]
+  double restVolume = 0.0;  // [m^3]; 0 for an open surface
+  // An open surface (BodyDesc::cloth, or a mesh with a border edge): it encloses no volume, and
+  // wind pushes its faces from either side.
+  bool open = false;
   double restSize = 0.0;    // bounding-box diagonal at rest [m]
   // Enclosed isothermal ideal gas at the ambient pressure p0 when the volume is restVolume: its
   // pressure over the ambient is p0 (V0 / V - 1). 0: the body holds no gas. [Pa]

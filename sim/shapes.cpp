@@ -214,4 +214,33 @@ TriMesh makeJelly(double radius, double height, int ridges, int rings, int segme
   return m;
 }
 
+TriMesh makeCloth(double width, double depth, int columns, int rows) {
+  assert(columns >= 1 && rows >= 1);
+  TriMesh m;
+  const auto n = static_cast<std::size_t>(columns), k = static_cast<std::size_t>(rows);
+  m.positions.reserve((n + 1) * (k + 1));
+  for (std::size_t j = 0; j <= k; ++j) {
+    for (std::size_t i = 0; i <= n; ++i) {
+      m.positions.push_back({-0.5 * width + width * static_cast<double>(i) / static_cast<double>(n), 0.0,
+                             -0.5 * depth + depth * static_cast<double>(j) / static_cast<double>(k)});
+    }
+  }
+  m.triangles.reserve(2 * n * k);
+  auto at = [n](std::size_t i, std::size_t j) { return u32(i + (n + 1) * j); };
+  for (std::size_t j = 0; j < k; ++j) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const uint32_t v00 = at(i, j), v10 = at(i + 1, j), v01 = at(i, j + 1), v11 = at(i + 1, j + 1);
+      // (x along i, z along j): (v00, v01, v11) turns counter-clockwise seen from +y.
+      if ((i + j) % 2 == 0) {
+        m.triangles.push_back({v00, v01, v11});
+        m.triangles.push_back({v00, v11, v10});
+      } else {
+        m.triangles.push_back({v00, v01, v10});
+        m.triangles.push_back({v10, v01, v11});
+      }
+    }
+  }
+  return m;
+}
+
 }  // namespace springy

@@ -1,4 +1,5 @@
-// springy: procedural closed shapes (all outward-oriented, single closed 2-manifolds).
+// springy: procedural shapes: closed ones (outward-oriented, single closed 2-manifolds) and the
+// cloth, an open flat sheet.
 //
 // The octahedron sphere is the original project's sphere: an octahedron whose faces are split
 // into n x n triangles and pushed onto the sphere. Its vertex count is 4n^2 + 2 and vertex 0 is
@@ -18,5 +19,13 @@ TriMesh makeOctahedronSphere(double radius, int n);   // 4 n^2 + 2 vertices, ver
 // wavy rim, a rounded top and a flat base. `height` along +y, base at y = 0 before centring;
 // the result is centred on its bounding box. rings x segments controls resolution.
 TriMesh makeJelly(double radius, double height, int ridges, int rings, int segments);
+
+// A cloth: a flat rectangular sheet in the x-z plane (y = 0) centred at the origin, `width`
+// along x and `depth` along z, split into columns x rows quads. Vertex (i, j) (i = 0 .. columns
+// along x, j = 0 .. rows along z) is index i + (columns + 1) j. Each quad is cut into two
+// triangles along alternating diagonals (a quad's diagonal turns where i + j changes parity), so
+// the sheet has no preferred shear direction; every triangle faces +y (counter-clockwise seen
+// from above). An open mesh: its 2 (columns + rows) border edges belong to one triangle each.
+TriMesh makeCloth(double width, double depth, int columns, int rows);
 
 }  // namespace springy

@@ -62,6 +62,21 @@ TEST_F(AppTest, VolumeLimitsFailACollapsingBody) {
   EXPECT_EQ(r.status, 0) << r.output;
 }
 
+TEST_F(AppTest, AClothHasNoVolumeToReportOrCheck) {
+  // Its volume columns read "-" (they divided by its rest volume, 0), and the volume limits pass
+  // it by while still holding the ball to them.
+  const Result r = run("check " + data("cloth.toml") + " --min-volume 0.5 --end-volume 0.5");
+  EXPECT_EQ(r.status, 0) << r.output;
+  const std::size_t row = r.output.find("\n  cloth ");
+  ASSERT_NE(row, std::string::npos) << r.output;
+  const std::string line = r.output.substr(row + 1, r.output.find('\n', row + 1) - row - 1);
+  EXPECT_NE(line.find(" - "), std::string::npos) << line;
+  for (const char* bad : {"nan", "inf"}) EXPECT_EQ(r.output.find(bad), std::string::npos) << r.output;
+  const Result ball = run("check " + data("cloth.toml") + " --end-volume 0.99999");
+  EXPECT_EQ(ball.status, 1) << ball.output;
+  EXPECT_NE(ball.output.find("body 'ball' ends at"), std::string::npos) << ball.output;
+}
+
 TEST_F(AppTest, EndAtRestFailsAMovingBodyAndPassesAStillOne) {
   // The tiny ball is still bouncing when its 1 s scene ends; the resting ball, set down on
   // the ground and damped, is still through its last second.

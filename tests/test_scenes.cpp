@@ -10,7 +10,9 @@
 
 #include "scene/scene.h"
 #include "sim/diagnostics.h"
+#include "sim/intersections.h"
 #include "sim/monitor.h"
+#include "sim/stability.h"
 
 namespace springy {
 namespace {
@@ -231,6 +233,31 @@ TEST(Scenes, SampleBodiesLandOnTheirPlatesAndOnThePlane) {
   EXPECT_TRUE(ground[2]) << "the tetrahedron never reached the plane";
   EXPECT_TRUE(ground[3]) << "the bunny never reached the plane";
   for (uint32_t b = 0; b < 4; ++b) EXPECT_GT(run.monitor.records()[b].minVolumeRatio, 0.7) << b;
+}
+
+// The flag, held along its pole side, streams out downwind in the gusts and never folds through
+// itself (it has no self contact: the audit looks at its faces here). 3 s of its 20.
+TEST(Scenes, FlagStreamsFromItsPoleAndNeverFoldsThroughItself) {
+  SceneRun run("flag");
+  const Model& model = run.world.model();
+  EXPECT_TRUE(model.bodies[0].open);
+  EXPECT_NE(std::find(run.world.forceStages().begin(), run.world.forceStages().end(), ForceStage::Wind),
+            run.world.forceStages().end());
+  ASSERT_EQ(model.pinned.size(), 21u);  // the whole edge at the pole
+  for (uint32_t i : model.pinned) EXPECT_EQ(model.restPosition[i].x, 0.0);
+  Model audit = model;
+  audit.bodies[0].selfContact = true;
+  double farthest = 0.0;
+  run.advance(3.0, [&] {
+    const std::vector<Intersection> crossing = findIntersections(audit, run.world.positions(), 1);
+    ASSERT_TRUE(crossing.empty()) << "the flag crosses itself at " << run.world.time() << " s";
+    farthest = std::min(farthest, run.body(0).centroid.x);
+  });
+  for (uint32_t i : model.pinned) EXPECT_EQ(run.world.positions()[i], model.restPosition[i]);
+  // Streaming downwind (-x) from the pole: in still air it hangs by the pole (centroid x 0.06 at 3 s).
+  EXPECT_LT(run.body(0).centroid.x, -0.5);
+  EXPECT_GT(run.body(0).centroid.y, 1.8);  // and not down on the ground
+  EXPECT_LT(farthest, -0.6);
 }
 
 TEST(Scenes, LightBunnyStaysStableAndKeepsItsShape) {

@@ -123,6 +123,8 @@ class BodyContacts {
     double restitution;
     // One side is a static collider: no push inside the thickness (see impulse()).
     bool still = false;
+    // The normal speed the impulse aimed at, without the push (set when one is applied).
+    double bounce = 0.0;
   };
   static constexpr uint64_t kNever = UINT64_MAX - 1;  // a search number no search has (nor its successor)
   struct Body {
@@ -154,6 +156,8 @@ class BodyContacts {
   }
   double inverseMass(uint32_t i) const { return i < vertexCount_ ? model_->invMass[i] : 0.0; }
   void addStatics();
+  // Step 4 of resolveStep(): the end velocities at the contacts that took an impulse.
+  void settleEndVelocities(std::vector<Vec3>& v1);
   bool staticContacts(uint32_t b, const Static& s, const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out,
                       uint64_t& candidates);
   // After a pass: which bodies' paths it changed (Body::moved), from touched_, which it clears.
@@ -201,6 +205,7 @@ class BodyContacts {
   std::vector<Box> boxes_;
   std::vector<PrimitivePair> pairs_;
   std::vector<Contact> contacts_;
+  std::vector<Contact> applied_;  // the contacts that took an impulse this step, in order
   std::vector<uint32_t> group_;  // union-find over the stopped vertices
   std::vector<Vec3> groupMomentum_;  // per group root: the stopped vertices' momentum and mass
   std::vector<double> groupMass_;

@@ -21,7 +21,7 @@ declare -A times=(
   [column]=0,0.8,1.6,5
   [pile]=0,0.8,2,8
   [stack]=0,0.6,1.5,8
-  [drape]=0.3,0.5,1.2,4
+  [drape]=0.3,0.5,1.2,5
   [flag]=1,4,16,20
 )
 for scene in "${!times[@]}"; do

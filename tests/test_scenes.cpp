@@ -260,6 +260,41 @@ TEST(Scenes, FlagStreamsFromItsPoleAndNeverFoldsThroughItself) {
   EXPECT_LT(farthest, -0.6);
 }
 
+// The cloth lands on the pinned ball and drapes over it: held up by the ball's top, hanging
+// down its sides, never inside it, and never through itself or the ball (the monitor's audit at
+// every frame, the cloth's self contact included). The first half second: the whole run to rest
+// (5 s) takes minutes.
+TEST(Scenes, DrapeCoversTheBallWithoutCrossing) {
+  SceneRun run("drape");
+  const Model& model = run.world.model();
+  ASSERT_EQ(model.bodies.size(), 2u);
+  ASSERT_TRUE(model.bodies[0].open);
+  ASSERT_TRUE(model.bodies[0].selfContact);
+  const BodyInfo& cloth = model.bodies[0];
+  const Vec3 centre{0.0, 0.3, 0.0};
+  const double radius = 0.3;
+  double closest = 1.0;  // of any cloth vertex to the ball's centre, over the run
+  run.advance(0.5, [&] {
+    for (uint32_t i = cloth.firstVertex; i < cloth.firstVertex + cloth.vertexCount; ++i) {
+      closest = std::min(closest, length(run.world.positions()[i] - centre));
+    }
+  });
+  double highest = 0.0, lowest = 1.0;
+  for (uint32_t i = cloth.firstVertex; i < cloth.firstVertex + cloth.vertexCount; ++i) {
+    highest = std::max(highest, run.world.positions()[i].y);
+    lowest = std::min(lowest, run.world.positions()[i].y);
+  }
+  // The icosphere's faces lie inside its circumscribed sphere by up to 1.2% of the radius.
+  EXPECT_GT(closest, 0.98 * radius) << "a cloth vertex went into the ball";
+  EXPECT_GT(highest, 2.0 * radius) << "not held up by the ball's top";
+  // Over it, not lying flat on its top: most of the sheet is below the top (its folds stand up).
+  EXPECT_LT(run.body(0).centroid.y, 2.0 * radius);
+  EXPECT_LT(lowest, radius) << "not hanging down the ball's sides";
+  ASSERT_NE(run.world.bodyContacts(), nullptr);
+  EXPECT_GT(run.world.bodyContacts()->sinceStart().contacts, 0u);
+  EXPECT_EQ(run.world.bodyContacts()->sinceStart().overflows, 0u);
+}
+
 TEST(Scenes, LightBunnyStaysStableAndKeepsItsShape) {
   SceneRun run("bunny_light");
   EXPECT_EQ(run.world.model().bodies[0].vertexCount, 500u);

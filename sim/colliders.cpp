@@ -152,14 +152,22 @@ bool Colliders::resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting
     if (!firstHit(start, to, hit)) return touched;
     touched = true;
     const Vec3 before = velocity;
-    velocity = contactVelocity(velocity, hit.normal, hit.material, restingSpeed, resting || round > 0);
+    const bool sustained = resting || round > 0;
+    velocity = contactVelocity(velocity, hit.normal, hit.material, restingSpeed, sustained);
     // The rest of the path slides along the surface, slowed as the velocity was.
     Vec3 rest = to - hit.point;
     rest -= hit.normal * dot(rest, hit.normal);
     const Vec3 vtBefore = before - hit.normal * dot(before, hit.normal);
     const double vtb = length(vtBefore);
     const double scale = vtb > 0.0 ? length(velocity - hit.normal * dot(velocity, hit.normal)) / vtb : 0.0;
+    // In sustained contact the vertex touched the surface all along the step (it began within the
+    // skin), so friction held the part of the path before the hit too. Kept, that part let a
+    // body that friction holds creep: each step's slide up to the hit escaped it (measured: a
+    // cube on a 20 degree plate with friction 1 crept 0.4 mm/s).
+    Vec3 slid = hit.point - start;
+    slid -= hit.normal * dot(slid, hit.normal);
     start = hit.point + hit.normal * skin;
+    if (sustained) start -= slid * (1.0 - scale);
     to = start + rest * scale;
   }
   // Out of rounds: stay at the last contact point rather than risk ending behind a surface.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "random.h"
+#include "scene/scene.h"
 #include "sim/colliders.h"
 #include "sim/diagnostics.h"
 #include "sim/shapes.h"
@@ -323,6 +324,43 @@ TEST(Friction, StaysAtRestOnASlopeShallowerThanAtanMu) {
     // creep of about 1 mm/s here), far below the 2 m a frictionless slide would cover in 1 s.
     EXPECT_LT(length(world.positions()[0]), 2e-3) << degrees;
   }
+}
+
+// A soft cube resting on a plate tilted by 20 degrees with friction 1 (atan 1 = 45 degrees):
+// friction holds it. Its bottom vertices, pressed by the body's weight, meet the plate every
+// step; the part of each step's path before the hit is held by friction too (it is in sustained
+// contact), or the cube creeps down the plate: it did, by 1.1 mm/s.
+TEST(Friction, ASoftCubeOnATiltedPlateDoesNotCreep) {
+  const SceneDesc scene = parseScene(R"(
+[scene]
+duration = 4.0
+[environment]
+gravity = [0.0, -9.81, 0.0]
+[[body]]
+name = "cube"
+shape = "cube"
+size = 0.5
+subdivisions = 2
+position = [0.0, 0.72, 0.0]
+rotation = [0.0, 0.0, 20.0]
+mass = 1.0
+[[triangles]]
+quads = [[[-1.8794, -0.2840, -2.0], [-1.8794, -0.2840, 2.0], [1.8794, 1.0840, 2.0], [1.8794, 1.0840, -2.0]]]
+friction = 1.0
+restitution = 0.0
+)",
+                                     "plate.toml");
+  World world(buildModel(scene), Integrator::RK4, 0.25e-3);
+  const auto centroid = [&] { return measureBody(world, 0).centroid; };
+  Vec3 settled;
+  for (int s = 1; s <= 12000; ++s) {  // 3 s: it lands and settles in the first
+    world.step();
+    if (s == 4000) settled = centroid();
+  }
+  // Measured over these 2 s: 2.2 mm when the slide before the hit escaped friction, 0.36 mm now
+  // (what is left comes from the steps in which a vertex drops through the plate's skin of 1 um
+  // without meeting it, which are free).
+  EXPECT_LT(length(centroid() - settled), 1e-3);
 }
 
 // ---------------------------------------------------------------------------------------------

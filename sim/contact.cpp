@@ -180,11 +180,12 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   maxCandidates_ = kMaxCandidatesPerPrimitive * primitives;
   vertexBox_.assign(vertexCount_, Box{});
   fatBox_.assign(vertexCount_, Box{});
-  for (uint32_t b : active_) {
-    bodies_[b].edgeBox.assign(bodies_[b].edges.size(), Box{});
-    bodies_[b].faceBox.assign(model.bodies[b].faceCount, Box{});
-  }
   kept_.resize(active_.size() * (active_.size() + statics_.size()));
+  vertexBody_.assign(vertexCount_, 0);
+  for (uint32_t b : active_) {
+    const BodyInfo& info = model.bodies[b];
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) vertexBody_[i] = b;
+  }
   // Self pairs closer than h at rest are not contacts (a mesh may start with parts that nearly
   // touch): found once with boxes grown by h, then measured.
   for (uint32_t b : active_) {
@@ -225,22 +226,6 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
       const SegmentSegmentClosest c = closestSegmentSegment(x[e[0]], x[e[1]], x[f[0]], x[f[1]]);
       if (c.distanceSquared < h * h) body.restEdgeEdge.push_back(p);
     }
-  }
-}
-
-void BodyContacts::updateBoxes(uint32_t b, bool onlyDirty) {
-  const Model& model = *model_;
-  Body& body = bodies_[b];
-  const BodyInfo& info = model.bodies[b];
-  // An edge's or face's swept box is its corners' merged (sweptBox() computes it so: the same bits).
-  for (uint32_t k = 0; k < body.edges.size(); ++k) {
-    const auto& e = body.edges[k];
-    if (!onlyDirty || dirtyEdge(e)) body.edgeBox[k] = merged(vertexBox_[e[0]], vertexBox_[e[1]]);
-  }
-  for (uint32_t f = 0; f < info.faceCount; ++f) {
-    const Triangle& t = model.faces[info.firstFace + f];
-    if (!onlyDirty || dirtyCorner(t))
-      body.faceBox[f] = merged(merged(vertexBox_[t[0]], vertexBox_[t[1]]), vertexBox_[t[2]]);
   }
 }
 
@@ -319,7 +304,7 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, Candidates& kept, const 
     }
     candidatePairs(
         full_, list, [&](uint32_t v) -> const Box& { return vertexBox_[vi.firstVertex + v]; },
-        [&](uint32_t f) -> const Box& { return F.faceBox[f]; },
+        [&](uint32_t f) { return faceBox(model.faces[fi.firstFace + f]); },
         [&](uint32_t v) { return dirty_[vi.firstVertex + v] != 0; },
         [&](uint32_t f) { return dirtyCorner(model.faces[fi.firstFace + f]); }, pairs_);
     if (!withinBudget(candidates)) return false;
@@ -353,9 +338,8 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, Candidates& kept, const 
       overlapPairs(A.edgeTree, B.edgeTree, list);
     }
     candidatePairs(
-        full_, list, [&](uint32_t e) -> const Box& { return A.edgeBox[e]; },
-        [&](uint32_t e) -> const Box& { return B.edgeBox[e]; }, [&](uint32_t e) { return dirtyEdge(A.edges[e]); },
-        [&](uint32_t e) { return dirtyEdge(B.edges[e]); }, pairs_);
+        full_, list, [&](uint32_t e) { return edgeBox(A.edges[e]); }, [&](uint32_t e) { return edgeBox(B.edges[e]); },
+        [&](uint32_t e) { return dirtyEdge(A.edges[e]); }, [&](uint32_t e) { return dirtyEdge(B.edges[e]); }, pairs_);
     if (!withinBudget(candidates)) return false;
     for (const PrimitivePair& p : pairs_) {
       const auto &e = A.edges[p.a], &f = B.edges[p.b];
@@ -390,7 +374,7 @@ bool BodyContacts::staticContacts(uint32_t b, const Static& s, Candidates& kept,
   const auto ok = [&]() {
     // The body's edges against the collider's sharp edges.
     candidatePairs(
-        full_, kept.lists[0], [&](uint32_t e) -> const Box& { return B.edgeBox[e]; },
+        full_, kept.lists[0], [&](uint32_t e) { return edgeBox(B.edges[e]); },
         [&](uint32_t e) -> const Box& { return s.edgeTree.boxOf(e); },
         [&](uint32_t e) { return dirtyEdge(B.edges[e]); }, kNeverDirty, pairs_);
     if (!withinBudget(candidates)) return false;
@@ -411,7 +395,7 @@ bool BodyContacts::staticContacts(uint32_t b, const Static& s, Candidates& kept,
     // it, so the normal points from the face to the corner).
     candidatePairs(
         full_, kept.lists[1], [&](uint32_t v) -> const Box& { return s.vertexTree.boxOf(v); },
-        [&](uint32_t f) -> const Box& { return B.faceBox[f]; }, kNeverDirty,
+        [&](uint32_t f) { return faceBox(model.faces[info.firstFace + f]); }, kNeverDirty,
         [&](uint32_t f) { return dirtyCorner(model.faces[info.firstFace + f]); }, pairs_);
     if (!withinBudget(candidates)) return false;
     for (const PrimitivePair& p : pairs_) {
@@ -444,7 +428,7 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
   for (uint32_t b : active_) {
     const BodyInfo& info = model.bodies[b];
     Body& body = bodies_[b];
-    if (!body.moved) continue;
+    if (!full_ || !body.moved) continue;
     Box box{x0[info.firstVertex], x0[info.firstVertex]};
     bool outside = false;
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
@@ -455,6 +439,16 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
     }
     body.box = box;
     body.outside = outside;
+  }
+  // After the first pass only the vertices whose paths changed in the pass before (dirty_) have
+  // new boxes. A body's box grows over them (it may be larger than its vertices' now: a pair it
+  // makes near in vain finds no candidates, as their boxes do not overlap).
+  for (uint32_t i : dirtyList_) {
+    Body& body = bodies_[vertexBody_[i]];
+    const Box vertex = sweptBox(Motion{x0[i], x0[i] + u_[i] * dt}, 0.5 * body.thickness);
+    vertexBox_[i] = vertex;
+    body.outside = body.outside || !inside(vertex, fatBox_[i]);
+    body.box = merged(body.box, vertex);
   }
   for (uint32_t b : active_) {
     bodies_[b].near = bodies_[b].self;
@@ -469,19 +463,10 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
       }
     }
   }
-  // A near body's edge and face boxes: exact for this search if they were for the last and it did
-  // not move since; else updated, only the primitives whose paths changed when they were exact for
-  // the last search (dirty_), all of them otherwise. New fat boxes if a vertex left its own.
-  ++search_;
+  // New fat boxes for a near body if a vertex left its own.
   for (uint32_t b : active_) {
     Body& body = bodies_[b];
-    if (!body.moved && body.fitted + 1 == search_) body.fitted = search_;
-    if (!body.near) continue;
-    if (body.fitted != search_) {
-      updateBoxes(b, body.fitted + 1 == search_);
-      body.fitted = search_;
-    }
-    if (body.fat == 0 || body.outside) refreshFat(b);
+    if (body.near && (body.fat == 0 || body.outside)) refreshFat(b);
   }
   // The pairs with a body that moved since the last pass (all on the first): a pair of two bodies
   // that did not has had every contact satisfied in that pass, or they would have moved. The kept
@@ -587,7 +572,7 @@ bool BodyContacts::impulse(const Contact& c, double dt, bool impact) {
     if (w == 0.0 || c.weight[k] == 0.0) continue;
     u_[i] += change * (c.weight[k] * w);
     push_[i] += pushed * (c.weight[k] * w);
-    changed_[i] = touched_[i] = 1;
+    touch(i);
   }
   return true;
 }
@@ -636,17 +621,15 @@ void BodyContacts::settleEndVelocities(std::vector<Vec3>& v1) {
 }
 
 void BodyContacts::markMoved() {
-  const Model& model = *model_;
-  for (uint32_t b : active_) {
-    const BodyInfo& info = model.bodies[b];
-    bool moved = false;
-    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
-      moved = moved || touched_[i];
-      dirty_[i] = touched_[i];
-      touched_[i] = 0;
-    }
-    bodies_[b].moved = moved;
+  for (uint32_t b : active_) bodies_[b].moved = false;
+  for (uint32_t i : dirtyList_) dirty_[i] = 0;
+  for (uint32_t i : touchedList_) {
+    dirty_[i] = 1;
+    touched_[i] = 0;
+    bodies_[vertexBody_[i]].moved = true;
   }
+  std::swap(dirtyList_, touchedList_);
+  touchedList_.clear();
   full_ = false;
 }
 
@@ -675,7 +658,9 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
   // A state that is no longer finite has blown up: there is no contact to resolve, and the
   // monitor (sim/monitor.h) stops the run at its next check.
   if (!finite) return false;
-  for (uint32_t b : active_) bodies_[b].moved = true, bodies_[b].fitted = kNever;
+  for (uint32_t b : active_) bodies_[b].moved = true;
+  for (uint32_t i : dirtyList_) dirty_[i] = 0;
+  dirtyList_.clear(), touchedList_.clear();
   full_ = true;
   applied_.clear();
   // 1. Impulses, pass after pass, until no contact needs one.
@@ -711,7 +696,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
         if (!stoppedAny) std::iota(group_.begin(), group_.end(), 0u);
         v1[i] += u_[i] - u0_[i] - push_[i];  // the impulses it took so far, whose other halves stay applied
         stopped_[i] = 1;
-        changed_[i] = touched_[i] = 1;
+        touch(i);
         u_[i] = Vec3{};
         stoppedAny = stoppedNow = true;
         ++last_.stopped;

@@ -132,24 +132,19 @@ class BodyContacts {
     // The normal speed the impulse aimed at, without the push (set when one is applied).
     double bounce = 0.0;
   };
-  static constexpr uint64_t kNever = UINT64_MAX - 1;  // a search number no search has (nor its successor)
   struct Body {
     double thickness = 0.0;
     double friction = 0.0;
     double restitution = 0.0;
     bool self = false;
     std::vector<std::array<uint32_t, 2>> edges;  // global vertex indices, each edge once, sorted
-    // The swept boxes (half the thickness around the paths) of the edges and faces this pass
-    // (the vertices' are in vertexBox_), exact when fitted == search_.
-    std::vector<Box> edgeBox, faceBox;
     // Trees over the fat boxes: the vertices' (fatBox_) and the edges' and faces' (their corners').
     Bvh vertexTree, edgeTree, faceTree;
     uint64_t fat = 0;          // which fat boxes it has (fatGeneration_ when they were made; 0: none)
     bool outside = true;       // a vertex's swept box is not inside its fat box (the kept pairs are stale)
     Box box;                   // the swept box of the whole body this pass
-    bool near = false;         // near another body this pass, or self contact: its boxes are updated
+    bool near = false;         // near another body this pass, or self contact: its fat boxes are kept
     bool moved = true;         // its paths changed in the last pass (every body on the first)
-    uint64_t fitted = kNever;  // the search (search_) for which edgeBox and faceBox were last exact
     std::vector<PrimitivePair> restVertexFace, restEdgeEdge;  // self pairs near at rest (sorted)
   };
   // The candidate pairs of two bodies (or one with self contact, or a body and a collider) whose
@@ -182,14 +177,21 @@ class BodyContacts {
   void settleEndVelocities(std::vector<Vec3>& v1);
   bool staticContacts(uint32_t b, const Static& s, Candidates& kept, const std::vector<Vec3>& x0, double dt,
                       std::vector<Contact>& out, uint64_t& candidates);
-  // After a pass: which bodies' paths it changed (Body::moved), from touched_, which it clears.
+  // After a pass: which bodies' paths it changed (Body::moved), from touched_, which it clears
+  // (dirty_ and dirtyList_ become the pass's).
   void markMoved();
+  // Vertex i's path changed in this pass.
+  void touch(uint32_t i) {
+    changed_[i] = 1;
+    if (!touched_[i]) touched_[i] = 1, touchedList_.push_back(i);
+  }
   // Ends a step whose search overflowed: keeps the impulses applied so far, counts it.
   bool overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
   bool resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
-  // The body's edge and face boxes from its vertices' (vertexBox_). onlyDirty: they were exact for
-  // the last search, and only dirty_ primitives changed since.
-  void updateBoxes(uint32_t body, bool onlyDirty);
+  // An edge's or face's swept box this pass: its corners' merged (sweptBox() computes it so, the
+  // same bits).
+  Box edgeBox(const std::array<uint32_t, 2>& e) const { return merged(vertexBox_[e[0]], vertexBox_[e[1]]); }
+  Box faceBox(const Triangle& t) const { return merged(merged(vertexBox_[t[0]], vertexBox_[t[1]]), vertexBox_[t[2]]); }
   // New fat boxes around the body's current swept boxes, and its trees over them.
   void refreshFat(uint32_t body);
   // Drops the kept pairs if they are too many to keep (kept.lists past maxCandidates_).
@@ -222,8 +224,9 @@ class BodyContacts {
   std::vector<uint8_t> changed_, stopped_;
   std::vector<uint8_t> touched_;  // changed in the current pass (per vertex)
   std::vector<uint8_t> dirty_;    // changed in the pass before (per vertex; collider vertices never)
-  bool full_ = true;              // this pass tests every candidate pair (the first of a step)
-  uint64_t search_ = 0;           // searches (findContacts) so far
+  std::vector<uint32_t> touchedList_, dirtyList_;  // the vertices with touched_, dirty_ set
+  std::vector<uint32_t> vertexBody_;               // per vertex of an active body: the body
+  bool full_ = true;                               // this pass tests every candidate pair (the first of a step)
   // Per vertex of the bodies: the swept box this pass (half the thickness around the path), and
   // the fat box the kept candidates were found with.
   std::vector<Box> vertexBox_, fatBox_;

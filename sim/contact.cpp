@@ -64,48 +64,28 @@ std::vector<std::array<uint32_t, 2>> sharpEdges(const TriMesh& mesh) {
   return sharp;
 }
 
-// Candidate pairs (p of tree a, q of tree b; for one tree, `self`, p < q) whose boxes overlap.
-// A full pass takes them all (one traversal of the two trees). A later pass takes only the pairs
-// with a primitive whose path changed in the pass before (`dirtyA`, `dirtyB`), found by querying
-// the other tree with its box: a pair of two unchanged primitives was tested then and needed no
-// impulse, or they would have changed, so it needs none now. Either way sorted, each pair once,
-// so that a later pass applies exactly the impulses a full one would, in the same order.
-template <class DirtyA, class DirtyB, class Exclude>
-void candidatePairs(bool full, const Bvh& a, const Bvh& b, bool self, const DirtyA& dirtyA, const DirtyB& dirtyB,
-                    const Exclude& exclude, std::vector<uint32_t>& hits, std::vector<PrimitivePair>& out) {
+// The pairs of `kept` (a superset: found with fat boxes that hold the current boxes) whose current
+// boxes overlap, in its (sorted) order. A full pass takes them all. A later pass takes only the
+// pairs with a primitive whose path changed in the pass before (`dirtyA`, `dirtyB`): a pair of two
+// unchanged primitives was tested then and needed no impulse, or they would have changed, so it
+// needs none now. Either way exactly the pairs whose boxes overlap (of those), so that every pass
+// tests the same pairs in the same order as one search of two trees over the current boxes would.
+template <class BoxA, class BoxB, class DirtyA, class DirtyB>
+void candidatePairs(bool full, const std::vector<PrimitivePair>& kept, const BoxA& boxA, const BoxB& boxB,
+                    const DirtyA& dirtyA, const DirtyB& dirtyB, std::vector<PrimitivePair>& out) {
   out.clear();
-  if (full) {
-    if (self) {
-      selfOverlapPairs(a, exclude, out);
-    } else {
-      overlapPairs(a, b, exclude, out);
-    }
-    return;
+  for (const PrimitivePair& p : kept) {
+    if (!full && !dirtyA(p.a) && !dirtyB(p.b)) continue;
+    if (overlaps(boxA(p.a), boxB(p.b))) out.push_back(p);
   }
-  for (uint32_t p = 0; p < a.primitiveCount(); ++p) {
-    if (!dirtyA(p)) continue;
-    hits.clear();
-    b.query(a.boxOf(p), hits);
-    for (uint32_t q : hits) {
-      if (self && p == q) continue;
-      const PrimitivePair pair = self ? PrimitivePair{std::min(p, q), std::max(p, q)} : PrimitivePair{p, q};
-      if (!exclude(pair.a, pair.b)) out.push_back(pair);
-    }
-  }
-  for (uint32_t q = 0; !self && q < b.primitiveCount(); ++q) {
-    if (!dirtyB(q)) continue;
-    hits.clear();
-    a.query(b.boxOf(q), hits);
-    for (uint32_t p : hits) {
-      if (!dirtyA(p) && !exclude(p, q)) out.push_back({p, q});  // with p dirty: found above
-    }
-  }
-  std::sort(out.begin(), out.end());
-  out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
-constexpr auto kNoExclusion = [](uint32_t, uint32_t) { return false; };
 constexpr auto kNeverDirty = [](uint32_t) { return false; };
+
+bool inside(const Box& box, const Box& in) {
+  return in.lo.x <= box.lo.x && in.lo.y <= box.lo.y && in.lo.z <= box.lo.z && box.hi.x <= in.hi.x &&
+         box.hi.y <= in.hi.y && box.hi.z <= in.hi.z;
+}
 
 }  // namespace
 
@@ -204,8 +184,14 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   }
   for (const Static& s : statics_) primitives += static_cast<double>(s.vertices.size() + s.edges.size());
   maxCandidates_ = kMaxCandidatesPerPrimitive * primitives;
-  // Trees over the rest shape (paths that stand still).
-  updateTrees(model.restPosition, 1.0);
+  vertexBox_.assign(vertexCount_, Box{});
+  fatBox_.assign(vertexCount_, Box{});
+  kept_.resize(active_.size() * (active_.size() + statics_.size()));
+  vertexBody_.assign(vertexCount_, 0);
+  for (uint32_t b : active_) {
+    const BodyInfo& info = model.bodies[b];
+    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) vertexBody_[i] = b;
+  }
   // Self pairs closer than h at rest are not contacts (a mesh may start with parts that nearly
   // touch): found once with boxes grown by h, then measured.
   for (uint32_t b : active_) {
@@ -249,61 +235,48 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   }
 }
 
-void BodyContacts::updateTrees(const std::vector<Vec3>& x0, double dt) {
-  for (uint32_t b : active_) updateTree(b, x0, dt, false);
-}
-
-void BodyContacts::updateTree(uint32_t b, const std::vector<Vec3>& x0, double dt, bool onlyDirty) {
+void BodyContacts::refreshFat(uint32_t b) {
   const Model& model = *model_;
-  const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
   Body& body = bodies_[b];
   const BodyInfo& info = model.bodies[b];
-  const double margin = 0.5 * body.thickness;
-  if (onlyDirty) {
-    for (uint32_t v = 0; v < info.vertexCount; ++v) {
-      const uint32_t i = info.firstVertex + v;
-      if (dirty_[i]) body.vertexTree.setBox(v, sweptBox(motion(i), margin));
+  const double margin = kCandidateMarginFactor * body.thickness;
+  const Vec3 m{margin, margin, margin};
+  const auto update = [&](Bvh& tree) {
+    if (tree.primitiveCount() != boxes_.size() || tree.nodes().empty()) {
+      tree.build(boxes_);
+    } else {
+      tree.refit(boxes_);
+      if (tree.needsRebuild()) tree.rebuild();
     }
-    body.vertexTree.refitNodes();
-    for (uint32_t k = 0; k < body.edges.size(); ++k) {
-      const auto& e = body.edges[k];
-      if (dirtyEdge(e)) body.edgeTree.setBox(k, sweptBox(motion(e[0]), motion(e[1]), margin));
-    }
-    body.edgeTree.refitNodes();
-    for (uint32_t f = 0; f < info.faceCount; ++f) {
-      const Triangle& t = model.faces[info.firstFace + f];
-      if (dirtyCorner(t)) body.faceTree.setBox(f, sweptBox(motion(t[0]), motion(t[1]), motion(t[2]), margin));
-    }
-    body.faceTree.refitNodes();
-    return;
+  };
+  boxes_.clear();
+  for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
+    fatBox_[i] = {vertexBox_[i].lo - m, vertexBox_[i].hi + m};
+    boxes_.push_back(fatBox_[i]);
   }
-  {
-    const auto update = [&](Bvh& tree) {
-      if (tree.primitiveCount() == 0) {
-        tree.build(boxes_);
-      } else {
-        tree.refit(boxes_);
-        if (tree.needsRebuild()) tree.rebuild();
-      }
-    };
-    boxes_.clear();
-    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
-      boxes_.push_back(sweptBox(motion(i), margin));
-    }
-    update(body.vertexTree);
-    boxes_.clear();
-    for (const auto& e : body.edges) boxes_.push_back(sweptBox(motion(e[0]), motion(e[1]), margin));
-    update(body.edgeTree);
-    boxes_.clear();
-    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
-      const Triangle& t = model.faces[f];
-      boxes_.push_back(sweptBox(motion(t[0]), motion(t[1]), motion(t[2]), margin));
-    }
-    update(body.faceTree);
+  update(body.vertexTree);
+  boxes_.clear();
+  for (const auto& e : body.edges) boxes_.push_back(merged(fatBox_[e[0]], fatBox_[e[1]]));
+  update(body.edgeTree);
+  boxes_.clear();
+  for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
+    const Triangle& t = model.faces[f];
+    boxes_.push_back(merged(merged(fatBox_[t[0]], fatBox_[t[1]]), fatBox_[t[2]]));
   }
+  update(body.faceTree);
+  body.fat = ++fatGeneration_;
+  body.outside = false;
 }
 
-bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>& x0, double dt,
+void BodyContacts::trimKept(Candidates& kept) const {
+  std::size_t size = 0;
+  for (const auto& list : kept.lists) size += list.size();
+  if (static_cast<double>(size) <= maxCandidates_) return;
+  // Too many to keep (bodies packed inside each other, or blown up): found anew next time.
+  kept = Candidates{};
+}
+
+bool BodyContacts::pairContacts(uint32_t a, uint32_t b, Candidates& kept, const std::vector<Vec3>& x0, double dt,
                                 std::vector<Contact>& out, uint64_t& candidates) {
   const Model& model = *model_;
   const Body &A = bodies_[a], &B = bodies_[b];
@@ -312,25 +285,34 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
   const double mu = std::max(A.friction, B.friction) > 0.0 ? std::sqrt(A.friction * B.friction) : 0.0;
   const double restitution = std::max(A.restitution, B.restitution);
   const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
+  // The kept candidates, found anew (one search of the fat trees) when a body's fat boxes changed.
+  const bool find = kept.fatA != A.fat || kept.fatB != B.fat;
+  if (find) {
+    for (auto& list : kept.lists) list.clear();
+    kept.fatA = A.fat, kept.fatB = B.fat;
+  }
   // Vertices of `vb` against faces of `fb`.
-  const auto vertexFace = [&](uint32_t vb, uint32_t fb) {
+  const auto vertexFace = [&](uint32_t vb, uint32_t fb, std::vector<PrimitivePair>& list) {
     const Body &V = bodies_[vb], &F = bodies_[fb];
     const BodyInfo &vi = model.bodies[vb], &fi = model.bodies[fb];
-    const auto dirtyVertex = [&](uint32_t v) { return dirty_[vi.firstVertex + v] != 0; };
-    const auto dirtyFace = [&](uint32_t f) { return dirtyCorner(model.faces[fi.firstFace + f]); };
-    if (self) {
-      candidatePairs(
-          full_, V.vertexTree, F.faceTree, false, dirtyVertex, dirtyFace,
+    if (find && self) {
+      overlapPairs(
+          V.vertexTree, F.faceTree,
           [&](uint32_t v, uint32_t f) {
             const Triangle& t = model.faces[fi.firstFace + f];
             const uint32_t i = vi.firstVertex + v;
             return t[0] == i || t[1] == i || t[2] == i ||
                    std::binary_search(V.restVertexFace.begin(), V.restVertexFace.end(), PrimitivePair{v, f});
           },
-          hits_, pairs_);
-    } else {
-      candidatePairs(full_, V.vertexTree, F.faceTree, false, dirtyVertex, dirtyFace, kNoExclusion, hits_, pairs_);
+          list);
+    } else if (find) {
+      overlapPairs(V.vertexTree, F.faceTree, list);
     }
+    candidatePairs(
+        full_, list, [&](uint32_t v) -> const Box& { return vertexBox_[vi.firstVertex + v]; },
+        [&](uint32_t f) { return faceBox(model.faces[fi.firstFace + f]); },
+        [&](uint32_t v) { return dirty_[vi.firstVertex + v] != 0; },
+        [&](uint32_t f) { return dirtyCorner(model.faces[fi.firstFace + f]); }, pairs_);
     if (!withinBudget(candidates)) return false;
     for (const PrimitivePair& p : pairs_) {
       const uint32_t i = vi.firstVertex + p.a;
@@ -347,95 +329,132 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>&
     }
     return true;
   };
-  if (!vertexFace(a, b)) return false;
-  if (!self && !vertexFace(b, a)) return false;
   // Edges against edges.
-  const auto dirtyEdgeA = [&](uint32_t e) { return dirtyEdge(A.edges[e]); };
-  const auto dirtyEdgeB = [&](uint32_t e) { return dirtyEdge(B.edges[e]); };
-  if (self) {
+  const auto edgeEdge = [&]() {
+    std::vector<PrimitivePair>& list = kept.lists[2];
+    if (find && self) {
+      selfOverlapPairs(
+          A.edgeTree,
+          [&](uint32_t e, uint32_t f) {
+            return sharesVertex(A.edges[e], A.edges[f]) ||
+                   std::binary_search(A.restEdgeEdge.begin(), A.restEdgeEdge.end(), PrimitivePair{e, f});
+          },
+          list);
+    } else if (find) {
+      overlapPairs(A.edgeTree, B.edgeTree, list);
+    }
     candidatePairs(
-        full_, A.edgeTree, A.edgeTree, true, dirtyEdgeA, dirtyEdgeA,
-        [&](uint32_t e, uint32_t f) {
-          return sharesVertex(A.edges[e], A.edges[f]) ||
-                 std::binary_search(A.restEdgeEdge.begin(), A.restEdgeEdge.end(), PrimitivePair{e, f});
-        },
-        hits_, pairs_);
-  } else {
-    candidatePairs(full_, A.edgeTree, B.edgeTree, false, dirtyEdgeA, dirtyEdgeB, kNoExclusion, hits_, pairs_);
-  }
-  if (!withinBudget(candidates)) return false;
-  for (const PrimitivePair& p : pairs_) {
-    const auto &e = A.edges[p.a], &f = B.edges[p.b];
-    EdgeEdgeContact c;
-    if (!edgeEdgeImpact(motion(e[0]), motion(e[1]), motion(f[0]), motion(f[1]), h, c)) continue;
-    out.push_back(
-        {{e[0], e[1], f[0], f[1]}, {1.0 - c.a, c.a, -(1.0 - c.b), -c.b}, c.normal, c.distance, h, mu, restitution});
-  }
-  return true;
+        full_, list, [&](uint32_t e) { return edgeBox(A.edges[e]); }, [&](uint32_t e) { return edgeBox(B.edges[e]); },
+        [&](uint32_t e) { return dirtyEdge(A.edges[e]); }, [&](uint32_t e) { return dirtyEdge(B.edges[e]); }, pairs_);
+    if (!withinBudget(candidates)) return false;
+    for (const PrimitivePair& p : pairs_) {
+      const auto &e = A.edges[p.a], &f = B.edges[p.b];
+      EdgeEdgeContact c;
+      if (!edgeEdgeImpact(motion(e[0]), motion(e[1]), motion(f[0]), motion(f[1]), h, c)) continue;
+      out.push_back(
+          {{e[0], e[1], f[0], f[1]}, {1.0 - c.a, c.a, -(1.0 - c.b), -c.b}, c.normal, c.distance, h, mu, restitution});
+    }
+    return true;
+  };
+  const bool ok = vertexFace(a, b, kept.lists[0]) && (self || vertexFace(b, a, kept.lists[1])) && edgeEdge();
+  // An overflow leaves the lists incomplete: found anew next time.
+  if (!ok) kept = Candidates{};
+  trimKept(kept);
+  return ok;
 }
 
-bool BodyContacts::staticContacts(uint32_t b, const Static& s, const std::vector<Vec3>& x0, double dt,
+bool BodyContacts::staticContacts(uint32_t b, const Static& s, Candidates& kept, const std::vector<Vec3>& x0, double dt,
                                   std::vector<Contact>& out, uint64_t& candidates) {
   const Model& model = *model_;
   const Body& B = bodies_[b];
   const BodyInfo& info = model.bodies[b];
   const double h = 0.5 * B.thickness;
   const auto motion = [&](uint32_t i) { return path(i, x0, dt); };
-  // The body's edges against the collider's sharp edges.
-  candidatePairs(
-      full_, B.edgeTree, s.edgeTree, false, [&](uint32_t e) { return dirtyEdge(B.edges[e]); }, kNeverDirty,
-      kNoExclusion, hits_, pairs_);
-  if (!withinBudget(candidates)) return false;
-  for (const PrimitivePair& p : pairs_) {
-    const auto &e = B.edges[p.a], &f = s.edges[p.b];
-    EdgeEdgeContact c;
-    if (!edgeEdgeImpact(motion(e[0]), motion(e[1]), motion(f[0]), motion(f[1]), h, c)) continue;
-    out.push_back({{e[0], e[1], f[0], f[1]},
-                   {1.0 - c.a, c.a, -(1.0 - c.b), -c.b},
-                   c.normal,
-                   c.distance,
-                   h,
-                   s.friction,
-                   s.restitution,
-                   true});
+  const bool find = kept.fatA != B.fat;
+  if (find) {
+    for (auto& list : kept.lists) list.clear();
+    overlapPairs(B.edgeTree, s.edgeTree, kept.lists[0]);
+    overlapPairs(s.vertexTree, B.faceTree, kept.lists[1]);
+    kept.fatA = B.fat, kept.fatB = 0;
   }
-  // The collider's corners against the body's faces (the vertex is the still side: weight 1 on
-  // it, so the normal points from the face to the corner).
-  candidatePairs(
-      full_, s.vertexTree, B.faceTree, false, kNeverDirty,
-      [&](uint32_t f) { return dirtyCorner(model.faces[info.firstFace + f]); }, kNoExclusion, hits_, pairs_);
-  if (!withinBudget(candidates)) return false;
-  for (const PrimitivePair& p : pairs_) {
-    const uint32_t i = s.vertices[p.a];
-    const Triangle& t = model.faces[info.firstFace + p.b];
-    VertexTriangleContact c;
-    if (!vertexTriangleImpact(motion(i), motion(t[0]), motion(t[1]), motion(t[2]), h, c)) continue;
-    out.push_back({{i, t[0], t[1], t[2]},
-                   {1.0, -c.weight[0], -c.weight[1], -c.weight[2]},
-                   c.normal,
-                   c.distance,
-                   h,
-                   s.friction,
-                   s.restitution,
-                   true});
-  }
-  return true;
+  const auto ok = [&]() {
+    // The body's edges against the collider's sharp edges.
+    candidatePairs(
+        full_, kept.lists[0], [&](uint32_t e) { return edgeBox(B.edges[e]); },
+        [&](uint32_t e) -> const Box& { return s.edgeTree.boxOf(e); },
+        [&](uint32_t e) { return dirtyEdge(B.edges[e]); }, kNeverDirty, pairs_);
+    if (!withinBudget(candidates)) return false;
+    for (const PrimitivePair& p : pairs_) {
+      const auto &e = B.edges[p.a], &f = s.edges[p.b];
+      EdgeEdgeContact c;
+      if (!edgeEdgeImpact(motion(e[0]), motion(e[1]), motion(f[0]), motion(f[1]), h, c)) continue;
+      out.push_back({{e[0], e[1], f[0], f[1]},
+                     {1.0 - c.a, c.a, -(1.0 - c.b), -c.b},
+                     c.normal,
+                     c.distance,
+                     h,
+                     s.friction,
+                     s.restitution,
+                     true});
+    }
+    // The collider's corners against the body's faces (the vertex is the still side: weight 1 on
+    // it, so the normal points from the face to the corner).
+    candidatePairs(
+        full_, kept.lists[1], [&](uint32_t v) -> const Box& { return s.vertexTree.boxOf(v); },
+        [&](uint32_t f) { return faceBox(model.faces[info.firstFace + f]); }, kNeverDirty,
+        [&](uint32_t f) { return dirtyCorner(model.faces[info.firstFace + f]); }, pairs_);
+    if (!withinBudget(candidates)) return false;
+    for (const PrimitivePair& p : pairs_) {
+      const uint32_t i = s.vertices[p.a];
+      const Triangle& t = model.faces[info.firstFace + p.b];
+      VertexTriangleContact c;
+      if (!vertexTriangleImpact(motion(i), motion(t[0]), motion(t[1]), motion(t[2]), h, c)) continue;
+      out.push_back({{i, t[0], t[1], t[2]},
+                     {1.0, -c.weight[0], -c.weight[1], -c.weight[2]},
+                     c.normal,
+                     c.distance,
+                     h,
+                     s.friction,
+                     s.restitution,
+                     true});
+    }
+    return true;
+  }();
+  trimKept(kept);
+  return ok;
 }
 
 bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* counted) {
   uint64_t candidates = 0;
   const Model& model = *model_;
   out.clear();
-  // Each moved body's swept box first (one pass over its vertices): the trees of a body that is
-  // near no other and has no self contact are not needed this pass.
+  // Each moved body's swept box first, from its vertices' (one pass over them, which also tells
+  // whether each is still inside its fat box): the boxes of a body that is near no other and has
+  // no self contact are not needed this pass.
   for (uint32_t b : active_) {
     const BodyInfo& info = model.bodies[b];
-    if (!bodies_[b].moved) continue;
+    Body& body = bodies_[b];
+    if (!full_ || !body.moved) continue;
     Box box{x0[info.firstVertex], x0[info.firstVertex]};
+    bool outside = false;
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
-      box = merged(box, sweptBox(Motion{x0[i], x0[i] + u_[i] * dt}, 0.5 * bodies_[b].thickness));
+      const Box vertex = sweptBox(Motion{x0[i], x0[i] + u_[i] * dt}, 0.5 * body.thickness);
+      vertexBox_[i] = vertex;
+      outside = outside || !inside(vertex, fatBox_[i]);
+      box = merged(box, vertex);
     }
-    bodies_[b].box = box;
+    body.box = box;
+    body.outside = outside;
+  }
+  // After the first pass only the vertices whose paths changed in the pass before (dirty_) have
+  // new boxes. A body's box grows over them (it may be larger than its vertices' now: a pair it
+  // makes near in vain finds no candidates, as their boxes do not overlap).
+  for (uint32_t i : dirtyList_) {
+    Body& body = bodies_[vertexBody_[i]];
+    const Box vertex = sweptBox(Motion{x0[i], x0[i] + u_[i] * dt}, 0.5 * body.thickness);
+    vertexBox_[i] = vertex;
+    body.outside = body.outside || !inside(vertex, fatBox_[i]);
+    body.box = merged(body.box, vertex);
   }
   for (uint32_t b : active_) {
     bodies_[b].near = bodies_[b].self;
@@ -450,33 +469,41 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
       }
     }
   }
-  // Trees: a body's are exact for this search if they were for the last and it did not move
-  // since; else a near body's are updated: only the primitives whose paths changed when they
-  // were exact for the last search (dirty_), all of them otherwise.
-  ++search_;
+  // New fat boxes for a near body if a vertex left its own.
   for (uint32_t b : active_) {
     Body& body = bodies_[b];
-    if (!body.moved && body.fitted + 1 == search_) body.fitted = search_;
-    if (!body.near || body.fitted == search_) continue;
-    updateTree(b, x0, dt, body.fitted + 1 == search_);
-    body.fitted = search_;
+    if (body.near && (body.fat == 0 || body.outside)) refreshFat(b);
   }
   // The pairs with a body that moved since the last pass (all on the first): a pair of two bodies
-  // that did not has had every contact satisfied in that pass, or they would have moved.
+  // that did not has had every contact satisfied in that pass, or they would have moved. The kept
+  // candidates of pairs that are not near are dropped on the first pass.
+  const std::size_t n = active_.size();
+  const auto keptAt = [&](std::size_t index) -> Candidates& {
+    if (!kept_[index]) kept_[index] = std::make_unique<Candidates>();
+    return *kept_[index];
+  };
   bool ok = true;
-  for (std::size_t k = 0; ok && k < active_.size(); ++k) {
+  for (std::size_t k = 0; ok && k < n; ++k) {
     const uint32_t a = active_[k];
     const bool movedA = bodies_[a].moved;
-    if (bodies_[a].self && movedA) ok = pairContacts(a, a, x0, dt, out, candidates);
-    for (std::size_t l = k + 1; ok && model.bodies[a].contact && l < active_.size(); ++l) {
+    if (bodies_[a].self && movedA) ok = pairContacts(a, a, keptAt(k * n + k), x0, dt, out, candidates);
+    for (std::size_t l = k + 1; ok && model.bodies[a].contact && l < n; ++l) {
       const uint32_t b = active_[l];
-      if ((movedA || bodies_[b].moved) && model.bodies[b].contact && overlaps(bodies_[a].box, bodies_[b].box)) {
-        ok = pairContacts(a, b, x0, dt, out, candidates);
+      const bool pair = model.bodies[b].contact && overlaps(bodies_[a].box, bodies_[b].box);
+      if ((movedA || bodies_[b].moved) && pair) {
+        ok = pairContacts(a, b, keptAt(k * n + l), x0, dt, out, candidates);
         if (!ok) overflowPair_ = {a, b};
+      } else if (full_ && !pair) {
+        kept_[k * n + l].reset();
       }
     }
     for (std::size_t s = 0; ok && movedA && model.bodies[a].contact && s < statics_.size(); ++s) {
-      if (overlaps(bodies_[a].box, statics_[s].box)) ok = staticContacts(a, statics_[s], x0, dt, out, candidates);
+      const std::size_t index = n * n + k * statics_.size() + s;
+      if (overlaps(bodies_[a].box, statics_[s].box)) {
+        ok = staticContacts(a, statics_[s], keptAt(index), x0, dt, out, candidates);
+      } else if (full_) {
+        kept_[index].reset();
+      }
     }
     if (!ok && overflowPair_[0] != a) overflowPair_ = {a, a};
   }
@@ -551,7 +578,7 @@ bool BodyContacts::impulse(const Contact& c, double dt, bool impact) {
     if (w == 0.0 || c.weight[k] == 0.0) continue;
     u_[i] += change * (c.weight[k] * w);
     push_[i] += pushed * (c.weight[k] * w);
-    changed_[i] = touched_[i] = 1;
+    touch(i);
   }
   return true;
 }
@@ -600,17 +627,15 @@ void BodyContacts::settleEndVelocities(std::vector<Vec3>& v1) {
 }
 
 void BodyContacts::markMoved() {
-  const Model& model = *model_;
-  for (uint32_t b : active_) {
-    const BodyInfo& info = model.bodies[b];
-    bool moved = false;
-    for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
-      moved = moved || touched_[i];
-      dirty_[i] = touched_[i];
-      touched_[i] = 0;
-    }
-    bodies_[b].moved = moved;
+  for (uint32_t b : active_) bodies_[b].moved = false;
+  for (uint32_t i : dirtyList_) dirty_[i] = 0;
+  for (uint32_t i : touchedList_) {
+    dirty_[i] = 1;
+    touched_[i] = 0;
+    bodies_[vertexBody_[i]].moved = true;
   }
+  std::swap(dirtyList_, touchedList_);
+  touchedList_.clear();
   full_ = false;
 }
 
@@ -639,7 +664,9 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
   // A state that is no longer finite has blown up: there is no contact to resolve, and the
   // monitor (sim/monitor.h) stops the run at its next check.
   if (!finite) return false;
-  for (uint32_t b : active_) bodies_[b].moved = true, bodies_[b].fitted = kNever;
+  for (uint32_t b : active_) bodies_[b].moved = true;
+  for (uint32_t i : dirtyList_) dirty_[i] = 0;
+  dirtyList_.clear(), touchedList_.clear();
   full_ = true;
   applied_.clear();
   // 1. Impulses, pass after pass, until no contact needs one.
@@ -675,7 +702,7 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
         if (!stoppedAny) std::iota(group_.begin(), group_.end(), 0u);
         v1[i] += u_[i] - u0_[i] - push_[i];  // the impulses it took so far, whose other halves stay applied
         stopped_[i] = 1;
-        changed_[i] = touched_[i] = 1;
+        touch(i);
         u_[i] = Vec3{};
         stoppedAny = stoppedNow = true;
         ++last_.stopped;

@@ -53,6 +53,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "sim/contact_bvh.h"
@@ -70,6 +71,11 @@ constexpr int kImpulsePasses = 8;
 // testing them all would cost time quadratic in their size. An overflow is reported (the
 // monitor stops the run), never passed over silently.
 constexpr double kMaxCandidatesPerPrimitive = 64.0;
+// The candidate pairs of two bodies are found with every primitive's swept box grown by this
+// fraction of its body's thickness (a fat box) and kept over the steps while every vertex's swept
+// box stays inside its fat box; each pass then only tests the kept pairs' tight boxes. Larger keeps
+// them longer and makes each test pass over more pairs (docs/benchmarks.md, issue 16).
+constexpr double kCandidateMarginFactor = 1.0;
 
 // What the contact stage did in one step (and summed over a run by the caller).
 struct ContactStats {
@@ -126,19 +132,30 @@ class BodyContacts {
     // The normal speed the impulse aimed at, without the push (set when one is applied).
     double bounce = 0.0;
   };
-  static constexpr uint64_t kNever = UINT64_MAX - 1;  // a search number no search has (nor its successor)
   struct Body {
     double thickness = 0.0;
     double friction = 0.0;
     double restitution = 0.0;
     bool self = false;
     std::vector<std::array<uint32_t, 2>> edges;  // global vertex indices, each edge once, sorted
+    // Trees over the fat boxes: the vertices' (fatBox_) and the edges' and faces' (their corners').
     Bvh vertexTree, edgeTree, faceTree;
-    Box box;            // the swept box of the whole body this pass
-    bool near = false;  // near another body this pass, or self contact: its trees are refitted
-    bool moved = true;  // its paths changed in the last pass (every body on the first)
-    uint64_t fitted = kNever;  // the search (search_) for which its trees were last exact
+    uint64_t fat = 0;          // which fat boxes it has (fatGeneration_ when they were made; 0: none)
+    bool outside = true;       // a vertex's swept box is not inside its fat box (the kept pairs are stale)
+    Box box;                   // the swept box of the whole body this pass
+    bool near = false;         // near another body this pass, or self contact: its fat boxes are kept
+    bool moved = true;         // its paths changed in the last pass (every body on the first)
     std::vector<PrimitivePair> restVertexFace, restEdgeEdge;  // self pairs near at rest (sorted)
+  };
+  // The candidate pairs of two bodies (or one with self contact, or a body and a collider) whose
+  // fat boxes overlap, sorted, without excluded pairs: vertices of the first against faces of the
+  // second, vertices of the second against faces of the first, edges against edges (self: the
+  // vertex-face and edge-edge pairs; collider: the body's edges against its sharp edges, its
+  // corners against the body's faces). Valid while both bodies have the fat boxes they were found
+  // with (fatA, fatB; a collider's are 0).
+  struct Candidates {
+    uint64_t fatA = 0, fatB = 0;
+    std::array<std::vector<PrimitivePair>, 3> lists;
   };
   // A triangle collider's sharp edges and their corners (vertex indices from vertexCount_ on).
   struct Static {
@@ -146,7 +163,7 @@ class BodyContacts {
     double friction = 0.0, restitution = 0.0;
     std::vector<std::array<uint32_t, 2>> edges;
     std::vector<uint32_t> vertices;
-    Bvh vertexTree, edgeTree;
+    Bvh vertexTree, edgeTree;  // over their boxes (no margin), built once
     Box box;
   };
   // The path of vertex i over the step (a collider's vertex stands still).
@@ -158,21 +175,31 @@ class BodyContacts {
   void addStatics();
   // Step 4 of resolveStep(): the end velocities at the contacts that took an impulse.
   void settleEndVelocities(std::vector<Vec3>& v1);
-  bool staticContacts(uint32_t b, const Static& s, const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out,
-                      uint64_t& candidates);
-  // After a pass: which bodies' paths it changed (Body::moved), from touched_, which it clears.
+  bool staticContacts(uint32_t b, const Static& s, Candidates& kept, const std::vector<Vec3>& x0, double dt,
+                      std::vector<Contact>& out, uint64_t& candidates);
+  // After a pass: which bodies' paths it changed (Body::moved), from touched_, which it clears
+  // (dirty_ and dirtyList_ become the pass's).
   void markMoved();
+  // Vertex i's path changed in this pass.
+  void touch(uint32_t i) {
+    changed_[i] = 1;
+    if (!touched_[i]) touched_[i] = 1, touchedList_.push_back(i);
+  }
   // Ends a step whose search overflowed: keeps the impulses applied so far, counts it.
   bool overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
   bool resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
-  // Swept boxes of every primitive on the paths x0 -> x0 + dt u, and the trees refitted over them.
-  void updateTrees(const std::vector<Vec3>& x0, double dt);
-  // onlyDirty: the trees were exact for the last search, and only dirty_ primitives changed since.
-  void updateTree(uint32_t body, const std::vector<Vec3>& x0, double dt, bool onlyDirty);
+  // An edge's or face's swept box this pass: its corners' merged (sweptBox() computes it so, the
+  // same bits).
+  Box edgeBox(const std::array<uint32_t, 2>& e) const { return merged(vertexBox_[e[0]], vertexBox_[e[1]]); }
+  Box faceBox(const Triangle& t) const { return merged(merged(vertexBox_[t[0]], vertexBox_[t[1]]), vertexBox_[t[2]]); }
+  // New fat boxes around the body's current swept boxes, and its trees over them.
+  void refreshFat(uint32_t body);
+  // Drops the kept pairs if they are too many to keep (kept.lists past maxCandidates_).
+  void trimKept(Candidates& kept) const;
   // Every contact on the current paths, in a fixed order; false on an overflow (out incomplete).
   bool findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* candidates);
-  bool pairContacts(uint32_t a, uint32_t b, const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out,
-                    uint64_t& candidates);
+  bool pairContacts(uint32_t a, uint32_t b, Candidates& kept, const std::vector<Vec3>& x0, double dt,
+                    std::vector<Contact>& out, uint64_t& candidates);
   // The contact's relative normal speed on the current paths.
   double normalSpeed(const Contact& c) const;
   // Counts the pairs just collected (pairs_); whether the search is still within
@@ -197,9 +224,16 @@ class BodyContacts {
   std::vector<uint8_t> changed_, stopped_;
   std::vector<uint8_t> touched_;  // changed in the current pass (per vertex)
   std::vector<uint8_t> dirty_;    // changed in the pass before (per vertex; collider vertices never)
-  bool full_ = true;              // this pass tests every candidate pair (the first of a step)
-  uint64_t search_ = 0;           // searches (findContacts) so far
-  std::vector<uint32_t> hits_;    // a tree query's result
+  std::vector<uint32_t> touchedList_, dirtyList_;  // the vertices with touched_, dirty_ set
+  std::vector<uint32_t> vertexBody_;               // per vertex of an active body: the body
+  bool full_ = true;                               // this pass tests every candidate pair (the first of a step)
+  // Per vertex of the bodies: the swept box this pass (half the thickness around the path), and
+  // the fat box the kept candidates were found with.
+  std::vector<Box> vertexBox_, fatBox_;
+  uint64_t fatGeneration_ = 0;  // fat boxes made so far
+  // Kept candidates per pair of active_ positions (k, l), k <= l, at k * n + l, then per (k, collider
+  // s) at n * n + k * statics + s; empty when the bodies are not near (dropped on a step's first pass).
+  std::vector<std::unique_ptr<Candidates>> kept_;
   bool dirtyEdge(const std::array<uint32_t, 2>& e) const { return dirty_[e[0]] || dirty_[e[1]]; }
   bool dirtyCorner(const Triangle& t) const { return dirty_[t[0]] || dirty_[t[1]] || dirty_[t[2]]; }
   std::vector<Box> boxes_;

@@ -9,6 +9,8 @@
 #include <limits>
 
 #include "scene/scene.h"
+#include "sim/contact.h"
+#include "sim/contact_geometry.h"
 #include "sim/diagnostics.h"
 #include "sim/intersections.h"
 #include "sim/monitor.h"
@@ -16,6 +18,8 @@
 
 namespace springy {
 namespace {
+
+constexpr double kNotYet = 1e9;  // a time not reached
 
 std::string scenePath(const std::string& name) { return std::string(SPRINGY_SOURCE_DIR) + "/scenes/" + name + ".toml"; }
 
@@ -203,9 +207,26 @@ TEST(Scenes, FullBunnyLandsAndKeepsItsShape) {
   EXPECT_GT(run.height(0), 0.9 * startHeight);  // ears up again
 }
 
-TEST(Scenes, SampleBodiesLandOnTheirPlatesAndOnThePlane) {
-  // The cube and the icosphere fall onto the two tilted plates, the tetrahedron and the bunny
-  // onto the plane.
+// The gap between two bodies: the least distance from a vertex of one to a face of the other.
+double gapBetween(const World& world, uint32_t a, uint32_t b) {
+  const Model& model = world.model();
+  const std::vector<Vec3>& x = world.positions();
+  double gap = std::numeric_limits<double>::infinity();
+  for (const auto& [v, f] : {std::pair{a, b}, std::pair{b, a}}) {
+    const BodyInfo &vi = model.bodies[v], &fi = model.bodies[f];
+    for (uint32_t i = vi.firstVertex; i < vi.firstVertex + vi.vertexCount; ++i) {
+      for (uint32_t k = fi.firstFace; k < fi.firstFace + fi.faceCount; ++k) {
+        const Triangle& t = model.faces[k];
+        gap = std::min(gap, std::sqrt(closestPointTriangle(x[i], x[t[0]], x[t[1]], x[t[2]]).distanceSquared));
+      }
+    }
+  }
+  return gap;
+}
+
+TEST(Scenes, SampleBodiesMeetThePlatesThePlaneAndEachOther) {
+  // The cube and the icosphere fall onto the two tilted plates, the tetrahedron onto the plane;
+  // the bunny falls onto the tetrahedron and is thrown off it onto the plane.
   SceneRun run("sample");
   const TriangleCollider& plates = run.world.model().colliders.meshes.at(0);
   ASSERT_EQ(plates.mesh.triangles.size(), 4u);  // two quads
@@ -222,16 +243,28 @@ TEST(Scenes, SampleBodiesLandOnTheirPlatesAndOnThePlane) {
     return false;
   };
   std::array<bool, 4> plate{}, ground{};
-  run.advance(5.0, [&] {
+  // Within 5 cm of the pair's contact thickness, which keeps them apart.
+  const BodyContacts* contacts = run.world.bodyContacts();
+  ASSERT_NE(contacts, nullptr);
+  const auto touching = [&](uint32_t a, uint32_t b) {
+    return gapBetween(run.world, a, b) < 0.5 * (contacts->thickness(a) + contacts->thickness(b)) + 0.05;
+  };
+  double bunnyOnTetrahedron = kNotYet;  // the first time they touch
+  int frame = 0;
+  run.advance(6.0, [&] {
     for (uint32_t b = 0; b < 4; ++b) {
       plate[b] = plate[b] || onPlate(b, b == 0 ? 0 : 1);
       ground[b] = ground[b] || run.lowest(b) < 0.05;
     }
+    if (++frame % 3 != 0) return;  // every 0.1 s
+    const double t = run.world.time();
+    if (bunnyOnTetrahedron == kNotYet && touching(3, 2)) bunnyOnTetrahedron = t;
   });
   EXPECT_TRUE(plate[0]) << "the cube never touched the first plate";
   EXPECT_TRUE(plate[1]) << "the icosphere never touched the second plate";
   EXPECT_TRUE(ground[2]) << "the tetrahedron never reached the plane";
   EXPECT_TRUE(ground[3]) << "the bunny never reached the plane";
+  EXPECT_LT(bunnyOnTetrahedron, 3.0) << "the bunny did not land on the tetrahedron";
   for (uint32_t b = 0; b < 4; ++b) EXPECT_GT(run.monitor.records()[b].minVolumeRatio, 0.7) << b;
 }
 

@@ -276,6 +276,20 @@ void BodyContacts::trimKept(Candidates& kept) const {
   kept = Candidates{};
 }
 
+void BodyContacts::addVertexFace(uint32_t i, const Triangle& t, const std::vector<Vec3>& x0, double dt, double h,
+                                 double friction, double restitution, bool still, std::vector<Contact>& out) const {
+  VertexTriangleContact c;
+  if (!vertexTriangleImpact(path(i, x0, dt), path(t[0], x0, dt), path(t[1], x0, dt), path(t[2], x0, dt), h, c)) return;
+  out.push_back({{i, t[0], t[1], t[2]},
+                 {1.0, -c.weight[0], -c.weight[1], -c.weight[2]},
+                 c.normal,
+                 c.distance,
+                 h,
+                 friction,
+                 restitution,
+                 still});
+}
+
 bool BodyContacts::pairContacts(uint32_t a, uint32_t b, Candidates& kept, const std::vector<Vec3>& x0, double dt,
                                 std::vector<Contact>& out, uint64_t& candidates) {
   const Model& model = *model_;
@@ -317,15 +331,7 @@ bool BodyContacts::pairContacts(uint32_t a, uint32_t b, Candidates& kept, const 
     for (const PrimitivePair& p : pairs_) {
       const uint32_t i = vi.firstVertex + p.a;
       const Triangle& t = model.faces[fi.firstFace + p.b];
-      VertexTriangleContact c;
-      if (!vertexTriangleImpact(motion(i), motion(t[0]), motion(t[1]), motion(t[2]), h, c)) continue;
-      out.push_back({{i, t[0], t[1], t[2]},
-                     {1.0, -c.weight[0], -c.weight[1], -c.weight[2]},
-                     c.normal,
-                     c.distance,
-                     h,
-                     mu,
-                     restitution});
+      addVertexFace(i, t, x0, dt, h, mu, restitution, false, out);
     }
     return true;
   };
@@ -407,16 +413,7 @@ bool BodyContacts::staticContacts(uint32_t b, const Static& s, Candidates& kept,
     for (const PrimitivePair& p : pairs_) {
       const uint32_t i = s.vertices[p.a];
       const Triangle& t = model.faces[info.firstFace + p.b];
-      VertexTriangleContact c;
-      if (!vertexTriangleImpact(motion(i), motion(t[0]), motion(t[1]), motion(t[2]), h, c)) continue;
-      out.push_back({{i, t[0], t[1], t[2]},
-                     {1.0, -c.weight[0], -c.weight[1], -c.weight[2]},
-                     c.normal,
-                     c.distance,
-                     h,
-                     s.friction,
-                     s.restitution,
-                     true});
+      addVertexFace(i, t, x0, dt, h, s.friction, s.restitution, true, out);
     }
     return true;
   }();

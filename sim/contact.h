@@ -167,6 +167,10 @@ class BodyContacts {
     Box box;
   };
   // The path of vertex i over the step (a collider's vertex stands still).
+  // Adds the contact of vertex i and triangle t if their paths come within h (weights 1 and
+  // minus the triangle's barycentrics; `still`: one side is a static collider).
+  void addVertexFace(uint32_t i, const Triangle& t, const std::vector<Vec3>& x0, double dt, double h, double friction,
+                     double restitution, bool still, std::vector<Contact>& out) const;
   Motion path(uint32_t i, const std::vector<Vec3>& x0, double dt) const {
     if (i >= vertexCount_) return {staticPosition_[i - vertexCount_], staticPosition_[i - vertexCount_]};
     return {x0[i], x0[i] + u_[i] * dt};

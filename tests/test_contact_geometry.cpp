@@ -325,6 +325,33 @@ TEST(VertexTriangleImpact, StartingWithinThicknessReportsZero) {
   EXPECT_NEAR(length(contact.normal), 1.0, 1e-15);
 }
 
+// Most pairs that the boxes let through stay clear along one direction all step (advance's
+// separatedOverStep): those need no closest-point query at all. A pair that comes within the
+// thickness is never cleared so: the answers at the threshold are the queries'.
+TEST(ContinuousCost, ClearPairsNeedNoQuery) {
+  const Motion a = still({0, 0, 0}), b = still({1, 0, 0}), c = still({0, 1, 0});
+  VertexTriangleContact vt;
+  // Over the face, sliding along it at height 0.3 (clear along the face's normal).
+  EXPECT_FALSE(vertexTriangleImpact(moving({0.2, 0.2, 0.3}, {0.3, 0, 0}), a, b, c, 0.2, vt));
+  EXPECT_EQ(vt.steps, 0);
+  // Beside the face, in its plane, moving along its edge (clear along the line between them).
+  EXPECT_FALSE(vertexTriangleImpact(moving({0.3, -0.5, 0}, {0.2, 0, 0}), a, b, c, 0.2, vt));
+  EXPECT_EQ(vt.steps, 0);
+  // Approaching to just outside the thickness, then to just inside it.
+  EXPECT_FALSE(vertexTriangleImpact(moving({0.2, 0.2, 1}, {0, 0, -0.8 + 1e-6}), a, b, c, 0.2, vt));
+  ASSERT_TRUE(vertexTriangleImpact(moving({0.2, 0.2, 1}, {0, 0, -0.8 - 1e-6}), a, b, c, 0.2, vt));
+  EXPECT_GT(vt.steps, 0);
+  // Two edges one over the other, both moving along x: clear along their common normal.
+  EdgeEdgeContact ee;
+  const Vec3 along{0.5, 0, 0};
+  EXPECT_FALSE(edgeEdgeImpact(moving({0, 0, 0.25}, along), moving({1, 0, 0.25}, along), moving({0.5, -0.5, 0}, along),
+                              moving({0.5, 0.5, 0}, along), 0.2, ee));
+  EXPECT_EQ(ee.steps, 0);
+  ASSERT_TRUE(edgeEdgeImpact(moving({0, 0, 0.25}, along), moving({1, 0, 0.25}, along), moving({0.5, -0.5, 0}, along),
+                             moving({0.5, 0.5, 0}, along), 0.3, ee));
+  EXPECT_EQ(ee.fraction, 0.0);
+}
+
 TEST(EdgeEdgeImpact, CrossingLikeAnXAtAKnownTime) {
   // p runs along x at height 1 - 2s (y = 0.3, x from -1 to 3); q along y at height 0 (x = 0, y
   // from -2 to 2). Above each other at a = 0.25, b = 0.575; they cross at s = 0.5.

@@ -84,9 +84,16 @@ class Elements {
   uint32_t begin_, end_;
 };
 
-// A fixed set of worker threads that run one function on every thread and wait for all of
-// them (fork-join). The calling thread is thread 0 and takes part; workers spin briefly
-// between jobs (a step issues several in a row) and then sleep on a futex.
+// A fixed set of worker threads that run one function on every share and wait for all of them
+// (fork-join). The calling thread runs share 0 and takes part; workers spin briefly between jobs
+// (a step issues several in a row) and then sleep on a futex.
+//
+// Shares are claimed, not assigned: a worker that wakes takes the next unclaimed share, and the
+// calling thread, done with share 0, takes every share still unclaimed and runs it itself. So a
+// worker that the OS has not scheduled (another process on its core, or the renderer's own
+// threads) costs the step nothing but the claim: the caller never waits for a share that has not
+// begun, only for one a worker is running. Results do not depend on who runs a share: share t
+// reads and writes what fn(t) names, whichever thread calls it.
 class ThreadPool {
  public:
   explicit ThreadPool(unsigned threads);
@@ -96,8 +103,8 @@ class ThreadPool {
 
   unsigned size() const { return threads_; }
 
-  // Runs fn(t) for every t in [0, size()), t = 0 on the calling thread; returns when all are
-  // done. fn must not throw.
+  // Runs fn(t) for every share t in [0, size()), t = 0 on the calling thread, each exactly once,
+  // on any thread; returns when all are done. fn must not throw.
   template <class F>
   void run(F&& fn) {
     if (threads_ == 1) {
@@ -113,17 +120,25 @@ class ThreadPool {
     run([&](unsigned t) { fn(n * t / threads_, n * (t + 1) / threads_); });
   }
 
+  // Shares the calling thread took over from workers since the pool was made (a measure of
+  // contention: workers that did not start in time).
+  uint64_t sharesTakenOver() const { return takenOver_.load(std::memory_order_relaxed); }
+
  private:
   using Job = void (*)(void*, unsigned);
   void dispatch(Job job, void* ctx);
-  void worker(unsigned index);
+  void worker();
+  // Claims the next share of the job in `state` (generation << 32 | next share) and runs it;
+  // false if none is left. `state` is updated to the latest value seen.
+  bool runNextShare(uint64_t& state);
 
   unsigned threads_;
   std::vector<std::thread> workers_;
   Job job_ = nullptr;
   void* ctx_ = nullptr;
-  std::atomic<uint32_t> generation_{0};
-  std::atomic<uint32_t> pending_{0};
+  std::atomic<uint64_t> state_{0};    // generation << 32 | next unclaimed share
+  std::atomic<uint32_t> pending_{0};  // shares 1.. not yet finished
+  std::atomic<uint64_t> takenOver_{0};
   std::atomic<bool> stop_{false};
 };
 

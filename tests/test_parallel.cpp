@@ -1,6 +1,7 @@
 // Threads: every thread count gives bit-identical results (sim/parallel.h), and the pool and
 // the split behave as documented.
 #include <gtest/gtest.h>
+#include <sched.h>
 
 #include <atomic>
 #include <cstdlib>
@@ -184,6 +185,33 @@ TEST(ThreadPool, RunsEveryThreadIndexOncePerJob) {
     for (std::size_t i = b; i < e; ++i) covered[i]++;
   });
   for (int c : covered) ASSERT_EQ(c, 1);
+}
+
+// On one core (the others busy, as on a loaded machine) the workers seldom run when a job
+// starts: the calling thread takes their shares over instead of waiting for them to be scheduled.
+// Every share still runs exactly once per job.
+TEST(ThreadPool, TheCallerTakesOverSharesNoWorkerStarted) {
+  cpu_set_t before, one;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(before), &before), 0);
+  CPU_ZERO(&one);
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (CPU_ISSET(c, &before)) {
+      CPU_SET(c, &one);
+      break;
+    }
+  }
+  ASSERT_EQ(sched_setaffinity(0, sizeof(one), &one), 0);  // the pool's threads inherit it
+  {
+    ThreadPool pool(4);
+    std::vector<std::atomic<int>> calls(4);
+    int jobs = 0;
+    for (; jobs < 20000 && (jobs < 1000 || pool.sharesTakenOver() == 0); ++jobs) {
+      pool.run([&](unsigned t) { calls[t].fetch_add(1); });
+    }
+    for (const auto& c : calls) EXPECT_EQ(c.load(), jobs);
+    EXPECT_GT(pool.sharesTakenOver(), 0u) << "after " << jobs << " jobs";
+  }
+  ASSERT_EQ(sched_setaffinity(0, sizeof(before), &before), 0);
 }
 
 TEST(ThreadPool, BadThreadCountInTheEnvironmentIsAnError) {

@@ -1,6 +1,8 @@
 #include "sim/parallel.h"
 
+#include <algorithm>
 #include <charconv>
+#include <chrono>
 #include <cstdlib>
 #include <string>
 #include <string_view>
@@ -36,7 +38,24 @@ T waitWhileEqual(const std::atomic<T>& value, T old) {
 
 }  // namespace
 
-ThreadPool::ThreadPool(unsigned threads) : threads_(threads == 0 ? 1 : threads) {
+uint64_t ContentionScore::record(int64_t ownNs, int64_t waitNs) {
+  own_ += ownNs;
+  wait_ += waitNs;
+  if (++jobs_ < kWindow) return 0;
+  // Waiting cost more than running the other threads' shares here would have.
+  const bool losing = wait_ > static_cast<int64_t>(threads_ - 1) * own_;
+  own_ = wait_ = 0;
+  jobs_ = 0;
+  if (!losing) {
+    soloWindows_ = 1;
+    return 0;
+  }
+  const uint64_t solo = static_cast<uint64_t>(soloWindows_) * kWindow;
+  soloWindows_ = std::min(2 * soloWindows_, kMaxSoloWindows);
+  return solo;
+}
+
+ThreadPool::ThreadPool(unsigned threads) : threads_(threads == 0 ? 1 : threads), score_(threads_) {
   // Generation 0 has no share left to claim.
   state_.store(threads_, std::memory_order_relaxed);
   workers_.reserve(threads_ - 1);
@@ -68,6 +87,14 @@ bool ThreadPool::runNextShare(uint64_t& state) {
 }
 
 void ThreadPool::dispatch(Job job, void* ctx) {
+  if (soloLeft_ > 0) {
+    --soloLeft_;
+    ++soloJobs_;
+    for (unsigned t = 0; t < threads_; ++t) job(ctx, t);
+    return;
+  }
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point start = Clock::now();
   job_ = job;
   ctx_ = ctx;
   pending_.store(threads_ - 1, std::memory_order_relaxed);
@@ -75,11 +102,17 @@ void ThreadPool::dispatch(Job job, void* ctx) {
   state_.store(generation << 32 | 1u, std::memory_order_release);  // publishes job_ and ctx_
   state_.notify_all();
   job(ctx, 0);
+  const Clock::time_point own = Clock::now();
   // Every share no worker has claimed yet, here.
   uint64_t state = state_.load(std::memory_order_acquire);
   while (runNextShare(state)) takenOver_.fetch_add(1, std::memory_order_relaxed);
+  const Clock::time_point claimed = Clock::now();
   uint32_t left = pending_.load(std::memory_order_acquire);
   while (left != 0) left = waitWhileEqual(pending_, left);
+  const Clock::time_point end = Clock::now();
+  // The score: the shares taken over count as the caller's own work, not as waiting.
+  soloLeft_ = score_.record(std::chrono::duration_cast<std::chrono::nanoseconds>(own - start).count(),
+                            std::chrono::duration_cast<std::chrono::nanoseconds>(end - claimed).count());
 }
 
 void ThreadPool::worker() {

@@ -84,6 +84,24 @@ class Elements {
   uint32_t begin_, end_;
 };
 
+// The score a ThreadPool keeps of its workers (below): fed each job's own time and waiting time
+// [ns]; at the end of each window of kWindow jobs it says how many of the next jobs to run alone
+// (0: keep the workers). Separate, so that its rule is tested on its own.
+class ContentionScore {
+ public:
+  static constexpr unsigned kWindow = 32;           // jobs per scored window
+  static constexpr unsigned kMaxSoloWindows = 512;  // the longest run alone, in windows
+
+  explicit ContentionScore(unsigned threads) : threads_(threads) {}
+  uint64_t record(int64_t ownNs, int64_t waitNs);
+
+ private:
+  unsigned threads_;
+  int64_t own_ = 0, wait_ = 0;
+  unsigned jobs_ = 0;
+  unsigned soloWindows_ = 1;
+};
+
 // A fixed set of worker threads that run one function on every share and wait for all of them
 // (fork-join). The calling thread runs share 0 and takes part; workers spin briefly between jobs
 // (a step issues several in a row) and then sleep on a futex.
@@ -94,6 +112,14 @@ class Elements {
 // threads) costs the step nothing but the claim: the caller never waits for a share that has not
 // begun, only for one a worker is running. Results do not depend on who runs a share: share t
 // reads and writes what fn(t) names, whichever thread calls it.
+//
+// A worker that claimed a share and was then preempted still holds the job up. So the pool keeps
+// score: over a window of jobs, the time the caller waited for workers against the time its own
+// shares took. When waiting cost more than running the other shares itself would have (wait >
+// (threads - 1) x own time), the caller runs every share alone for the next windows, twice as
+// many each time that a trial window loses again (up to 512 windows), and then tries the
+// workers again. So a busy machine costs at most a trial window now and then, and an idle one
+// keeps its threads.
 class ThreadPool {
  public:
   explicit ThreadPool(unsigned threads);
@@ -123,6 +149,8 @@ class ThreadPool {
   // Shares the calling thread took over from workers since the pool was made (a measure of
   // contention: workers that did not start in time).
   uint64_t sharesTakenOver() const { return takenOver_.load(std::memory_order_relaxed); }
+  // Jobs the caller ran alone because the workers had been losing time (see above).
+  uint64_t soloJobs() const { return soloJobs_; }
 
  private:
   using Job = void (*)(void*, unsigned);
@@ -140,6 +168,9 @@ class ThreadPool {
   std::atomic<uint32_t> pending_{0};  // shares 1.. not yet finished
   std::atomic<uint64_t> takenOver_{0};
   std::atomic<bool> stop_{false};
+  // The calling thread's alone: the score, and the jobs left to run alone.
+  ContentionScore score_;
+  uint64_t soloLeft_ = 0, soloJobs_ = 0;
 };
 
 // Threads to use when the user gives none: SPRINGY_THREADS if set, else the hardware's count.

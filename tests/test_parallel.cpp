@@ -214,6 +214,38 @@ TEST(ThreadPool, TheCallerTakesOverSharesNoWorkerStarted) {
   ASSERT_EQ(sched_setaffinity(0, sizeof(before), &before), 0);
 }
 
+// The pool's rule for running alone: a window in which waiting for the workers cost more than
+// the other shares' work done here would have sends the caller alone for a window, then two, four
+// ... (up to the cap); a window the workers win resets it.
+TEST(ContentionScore, RunsAloneAfterALosingWindowForLongerEachTime) {
+  ContentionScore score(2);
+  const auto window = [&](int64_t own, int64_t wait) {
+    uint64_t solo = 0;
+    for (unsigned j = 0; j < ContentionScore::kWindow; ++j) {
+      const uint64_t s = score.record(own, wait);
+      if (j + 1 < ContentionScore::kWindow) {
+        EXPECT_EQ(s, 0u) << "decided before the window ended";
+      }
+      solo = s;
+    }
+    return solo;
+  };
+  EXPECT_EQ(window(1000, 900), 0u);  // waiting less than the other share would take: keep them
+  EXPECT_EQ(window(1000, 1100), ContentionScore::kWindow);
+  EXPECT_EQ(window(1000, 5000), 2u * ContentionScore::kWindow);
+  EXPECT_EQ(window(1000, 5000), 4u * ContentionScore::kWindow);
+  for (int k = 0; k < 20; ++k) window(1000, 5000);
+  EXPECT_EQ(window(1000, 5000), uint64_t{ContentionScore::kMaxSoloWindows} * ContentionScore::kWindow);
+  EXPECT_EQ(window(1000, 100), 0u);  // the workers won: back to one window
+  EXPECT_EQ(window(1000, 5000), ContentionScore::kWindow);
+  // Four threads: the caller would run three other shares, so waiting up to three times its own
+  // time still pays.
+  ContentionScore four(4);
+  uint64_t solo = 0;
+  for (unsigned j = 0; j < ContentionScore::kWindow; ++j) solo = four.record(1000, 2900);
+  EXPECT_EQ(solo, 0u);
+}
+
 TEST(ThreadPool, BadThreadCountInTheEnvironmentIsAnError) {
   ::setenv("SPRINGY_THREADS", "two", 1);
   try {

@@ -2,14 +2,17 @@
 // translucent body showing only its nearest surface. Small frames, no anti-aliasing.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <vector>
 
 #include "render/camera.h"
 #include "render/image.h"
 #include "render/look.h"
 #include "render/mesh_builders.h"
+#include "render/refine.h"
 #include "render/renderer.h"
 #include "test_util.h"
 
@@ -17,20 +20,12 @@ using namespace springy::render;
 using springy::render::test::luminance;
 using springy::render::test::pixel;
 using springy::render::test::regionMean;
+using springy::render::test::small;
 
 namespace {
 
 void dump(const Image& img, const std::string& name) {
   if (const char* dir = std::getenv("SPRINGY_RENDER_DUMP")) writePng(std::string(dir) + "/" + name, img);
-}
-
-RenderSettings small(int w, int h) {
-  RenderSettings s;
-  s.width = w;
-  s.height = h;
-  s.antiAlias = false;
-  s.shadowMapSize = 512;
-  return s;
 }
 
 }  // namespace
@@ -203,4 +198,36 @@ TEST(Look, TranslucentBodyShowsNoFarSideEdges) {
   int seeThrough = 0;
   for (std::size_t i = 0; i < flat.rgba.size(); i += 4) seeThrough += flat.rgba[i + 1] != opaque.rgba[i + 1];
   EXPECT_GT(seeThrough, inside / 2);
+}
+
+// Smooth silhouettes: PN triangles over an octahedron (6 vertices on the unit sphere, normals
+// pointing out) make a closed surface through its vertices that is far rounder than its flat
+// faces: no refined vertex is off the sphere by more than 0.6 of the flat faces' worst (a face's
+// centre is 0.42 inside it; a flat midpoint of an edge 0.29). An octahedron is PN triangles'
+// hardest case (90 degrees between neighbouring normals): its face centres stay 0.23 inside.
+TEST(Look, PnTrianglesRoundACoarseMeshWithoutCracks) {
+  const std::vector<glm::vec3> p = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const std::vector<std::uint32_t> tris = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  for (int level : {2, 3}) {
+    const PnRefinement pn(tris, p.size(), level);
+    ASSERT_TRUE(pn.active());
+    EXPECT_EQ(pn.triangles().size(), tris.size() * static_cast<std::size_t>(level * level));
+    std::vector<glm::vec3> out;
+    pn.evaluate(p, p, out);  // on the unit sphere the normals are the positions
+    ASSERT_EQ(out.size(), pn.vertexCount());
+    for (std::size_t i = 0; i < p.size(); ++i) EXPECT_EQ(out[i], p[i]);  // through the vertices
+    float worst = 0.0f;
+    for (const glm::vec3& q : out) worst = std::max(worst, std::fabs(glm::length(q) - 1.0f));
+    const float flatWorst = 1.0f - glm::length(glm::vec3(1.0f) / 3.0f);
+    EXPECT_LT(worst, 0.6f * flatWorst) << "level " << level;
+    // Closed: every directed edge of the refined mesh once, and its reverse once.
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+    const std::vector<std::uint32_t>& t = pn.triangles();
+    for (std::size_t i = 0; i < t.size(); i += 3)
+      for (int k = 0; k < 3; ++k) ++directed[{t[i + k], t[i + (k + 1) % 3]}];
+    for (const auto& [e, n] : directed) {
+      EXPECT_EQ(n, 1);
+      EXPECT_EQ(directed.count({e.second, e.first}), 1u);
+    }
+  }
 }

@@ -18,17 +18,9 @@ using namespace springy::render;
 using springy::render::test::luminance;
 using springy::render::test::pixel;
 using springy::render::test::regionMean;
+using springy::render::test::small;
 
 namespace {
-
-RenderSettings small(int w = 64, int h = 48, bool aa = false) {
-  RenderSettings s;
-  s.width = w;
-  s.height = h;
-  s.antiAlias = aa;
-  s.shadowMapSize = 1024;
-  return s;
-}
 
 glm::vec3 to255(glm::vec3 c) { return c * 255.0f; }
 

@@ -4,6 +4,8 @@
 #include <glm/glm.hpp>
 #include <vector>
 
+#include "render/renderer.h"
+
 namespace springy::render::test {
 
 inline glm::vec3 pixel(const std::vector<std::uint8_t>& rgba, int width, int x, int y) {
@@ -25,6 +27,16 @@ inline glm::vec3 regionMean(const std::vector<std::uint8_t>& rgba, int width, in
       ++n;
     }
   return n ? sum / static_cast<float>(n) : sum;
+}
+
+// Small frames for fast tests: w x h, anti-aliasing off unless asked, a 1024 shadow map.
+inline RenderSettings small(int w = 64, int h = 48, bool aa = false) {
+  RenderSettings s;
+  s.width = w;
+  s.height = h;
+  s.antiAlias = aa;
+  s.shadowMapSize = 1024;
+  return s;
 }
 
 inline float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }

@@ -175,10 +175,11 @@ void main() {
   float transmit = exp(-3.0 * thick) * (0.5 + 0.5 * max(dot(-l, v), 0.0));
   vec3 body = uAlbedo * (ambient + uLightColour * (wrap * shadow + 0.8 * transmit));
   // Strong specular and a Fresnel rim (Schlick 1994, F0 = 0.04 for water-like gelatine)
-  // reflecting the sky.
+  // reflecting the hemisphere in the mirror direction: sky above, ground below.
   float spec = ndl > 0.0 ? max(uSpecular, 0.9) * pow(max(dot(n, h), 0.0), uShininess) : 0.0;
   float fresnel = 0.04 + 0.96 * pow(1.0 - ndv, 5.0);
-  vec3 reflected = uLightColour * spec * shadow + fresnel * uAmbientSky * 1.5;
+  vec3 env = mix(uAmbientGround, uAmbientSky, 0.5 + 0.5 * reflect(-v, n).y);
+  vec3 reflected = uLightColour * spec * shadow + fresnel * env;
   // Opacity grows with the thickness: 1 - (1 - alpha)^(0.3 + n.v), alpha where n.v = 0.7.
   float opacity = 1.0 - pow(1.0 - uAlpha, 0.3 + thick);
   // Premultiplied: the body covers `opacity`, the reflection adds on top.

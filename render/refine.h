@@ -29,10 +29,11 @@ class PnRefinement {
   void evaluate(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
                 std::vector<glm::vec3>& out) const;
 
-  // Triangles above which a mesh is drawn as it is (refining it would cost more than it shows),
-  // and the level for a mesh of `triangles` triangles: about kTargetTriangles after refinement,
-  // at most 3 (a 146-vertex ball's outline is smooth at 3).
-  static constexpr std::size_t kTargetTriangles = 20000;
+  // Only coarse meshes are refined (a fine one shows no facets on its outline and would cost
+  // for nothing): the level for a mesh of `triangles` triangles puts it at about
+  // kTargetTriangles after refinement, at most 3 (a 146-vertex ball's outline is smooth at 3):
+  // 3 up to 1333 triangles, 2 up to 3000, none above.
+  static constexpr std::size_t kTargetTriangles = 12000;
   static int levelFor(std::size_t triangles);
 
  private:

@@ -85,8 +85,8 @@ struct Renderer::Impl {
   RenderSettings settings;
   GlContext ctx;
   // Mesh shader variants, compiled on first use: index = shadows | ground << 1 | flat << 2 |
-  // jelly << 3.
-  std::optional<Program> meshProgs[16];
+  // jelly << 3 | contact << 4.
+  std::optional<Program> meshProgs[32];
   Program depthProg, skyProg, overlayProg, fxaaEdgeProg, fxaaProg;
   // Per frame: which mesh variants got this frame's shared uniforms, and what they are.
   unsigned framePrepared = 0;
@@ -308,12 +308,12 @@ struct Renderer::Impl {
     if (current != &p) p.use(), current = &p;
   }
 
-  Program& meshProgram(bool shadowsOn, const GpuMesh& m) {
-    const unsigned key =
-        (shadowsOn ? 1u : 0u) | (m.ground ? 2u : 0u) | (m.material.flat && !m.ground ? 4u : 0u) | (jelly(m) ? 8u : 0u);
+  Program& meshProgram(bool shadowsOn, const GpuMesh& m, bool contactOn) {
+    const unsigned key = (shadowsOn ? 1u : 0u) | (m.ground ? 2u : 0u) | (m.material.flat && !m.ground ? 4u : 0u) |
+                         (jelly(m) ? 8u : 0u) | (contactOn ? 16u : 0u);
     std::optional<Program>& p = meshProgs[key];
     if (!p) {
-      const std::string fs = meshVariantSource(key & 1u, key & 2u, key & 4u, key & 8u);
+      const std::string fs = meshVariantSource(key & 1u, key & 2u, key & 4u, key & 8u, key & 16u);
       p.emplace(kMeshVs, fs.c_str(), "mesh");
     }
     use(*p);
@@ -345,8 +345,12 @@ struct Renderer::Impl {
   // Translucent bodies are shaded as gelatine (the JELLY variant).
   static bool jelly(const GpuMesh& m) { return !m.ground && m.material.alpha < 1.0f; }
 
-  void drawMesh(bool shadowsOn, const GpuMesh& m) {
-    Program& p = meshProgram(shadowsOn, m);
+  // Whether another body than m itself darkens it (the CONTACT variant is needed).
+  bool contactOn(const GpuMesh& m) const { return frameUniforms.occluders > (m.occluder >= 0 ? 1 : 0); }
+
+  void drawMesh(bool shadowsOn, const GpuMesh& m) { drawMesh(shadowsOn, m, contactOn(m)); }
+  void drawMesh(bool shadowsOn, const GpuMesh& m, bool contact) {
+    Program& p = meshProgram(shadowsOn, m, contact);
     p.set("uAlbedo", toLinear(m.material.colour));
     p.set("uAlpha", std::clamp(m.material.alpha, 0.0f, 1.0f));
     p.set("uSelf", m.occluder);
@@ -515,23 +519,57 @@ struct Renderer::Impl {
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.0f, 4.0f);
     for (const GpuMesh* g : grounds) {
+      // Contact shadows where some body's reach meets this ground on screen (none: unbounded).
+      std::optional<glm::ivec4> contactRect;
+      bool contact = false;
+      if (frameUniforms.occluders > 0) {
+        contactRect = contactFootprint(*g);
+        contact = !contactRect || ((*contactRect)[2] > 0 && (*contactRect)[3] > 0);
+      }
       const std::optional<glm::ivec4> rect =
           shadowsOn ? shadowFootprint(g->groundOrigin, g->groundU, g->groundV, light.direction, frameUniforms.lightVP,
                                       frameUniforms.viewProj, settings.width, settings.height)
                     : std::nullopt;
-      if (!rect) {
-        drawMesh(shadowsOn, *g);
+      if ((shadowsOn && !rect) || (contact && !contactRect) || (!shadowsOn && !contact)) {
+        drawMesh(shadowsOn, *g, contact);  // everywhere, with all it needs
         continue;
       }
-      drawMesh(false, *g);
-      if ((*rect)[2] <= 0 || (*rect)[3] <= 0) continue;  // the footprint is off screen
+      drawMesh(false, *g, false);
+      // Shadow taps and contact shadows inside the rectangle that holds both footprints (outside
+      // the shadow map's, its taps return "lit"; outside the contact one, the occlusion is 0).
+      glm::ivec2 lo(settings.width, settings.height), hi(0, 0);
+      for (const std::optional<glm::ivec4>& r : {rect, contactRect}) {
+        if (!r || (*r)[2] <= 0 || (*r)[3] <= 0) continue;
+        lo = glm::min(lo, glm::ivec2((*r)[0], (*r)[1]));
+        hi = glm::max(hi, glm::ivec2((*r)[0] + (*r)[2], (*r)[1] + (*r)[3]));
+      }
+      if (hi.x <= lo.x || hi.y <= lo.y) continue;  // both off screen
       glEnable(GL_SCISSOR_TEST);
-      glScissor((*rect)[0], (*rect)[1], (*rect)[2], (*rect)[3]);
-      drawMesh(true, *g);
+      glScissor(lo.x, lo.y, hi.x - lo.x, hi.y - lo.y);
+      drawMesh(shadowsOn, *g, contact);
       glDisable(GL_SCISSOR_TEST);
     }
     glDisable(GL_POLYGON_OFFSET_FILL);
     mark(RenderPass::Ground);
+  }
+
+  // The screen rectangle where contact shadows can fall on ground g: every occluder's box of 2.5
+  // of its radii (beyond it the shader's occlusion is exactly 0) that reaches the ground, dropped
+  // onto it. Empty (width 0) when none reaches it; none when unbounded (behind the camera).
+  std::optional<glm::ivec4> contactFootprint(const GpuMesh& g) const {
+    const glm::vec3 n = glm::normalize(glm::cross(g.groundU, g.groundV));
+    std::vector<glm::vec3> corners;
+    for (int i = 0; i < frameUniforms.occluders; ++i) {
+      const glm::vec3 c = frameUniforms.occCentre[i], r = frameUniforms.occRadii[i];
+      if (std::abs(glm::dot(c - g.groundOrigin, n)) > 2.5f * glm::length(r * n)) continue;  // out of reach
+      for (int k = 0; k < 8; ++k) {
+        const glm::vec3 s((k & 1) ? 1.0f : -1.0f, (k & 2) ? 1.0f : -1.0f, (k & 4) ? 1.0f : -1.0f);
+        const glm::vec3 p = c + 2.5f * s * r;
+        corners.push_back(p - n * glm::dot(p - g.groundOrigin, n));
+      }
+    }
+    if (corners.empty()) return glm::ivec4(0);
+    return screenRect(corners, frameUniforms.viewProj, settings.width, settings.height, 2.0f);
   }
 
   // The sky on the far plane, after the opaque meshes: early depth testing leaves out every

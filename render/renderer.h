@@ -64,8 +64,8 @@ struct RenderSettings {
   bool fitShadowMap = true;
   float shadowSoftness = 1.0f;  // PCF tap spacing in shadow-map texels
   // Smooth silhouettes: dynamic meshes that are not flat-shaded are drawn from PN triangles
-  // (refine.h) bound to their vertices, each triangle as 4 or 9 (about 20k triangles per mesh at
-  // most; meshes of 5000+ triangles as they are).
+  // (refine.h) bound to their vertices, each triangle as 9 or 4 (about 12k triangles per mesh at
+  // most; meshes of more than 3000 triangles, fine enough, as they are).
   bool smoothSilhouettes = true;
   // Contact shadows: every dynamic mesh (the first 16) darkens the ambient (and 3/4 of the direct
   // light) of the ground and the other meshes near it (analytic ellipsoid occlusion).

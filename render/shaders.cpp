@@ -56,7 +56,7 @@ vec3 toneMap(vec3 c) {
 vec3 toDisplay(vec3 c) { return srgbEncode(toneMap(c)); }
 )";
 
-// Compiled in variants (see meshVariantSource): SHADOWS, GROUND, FLAT and JELLY are preprocessor
+// Compiled in variants (see meshVariantSource): SHADOWS, GROUND, FLAT, JELLY and CONTACT are preprocessor
 // switches, so a fragment only runs the code its mesh needs (llvmpipe executes both sides of a
 // branch, even on a uniform).
 namespace {
@@ -146,7 +146,11 @@ void main() {
 #endif
   // Hemisphere ambient: sky light from above, light bounced off the ground from below.
   vec3 ambient = mix(uAmbientGround, uAmbientSky, 0.5 + 0.5 * n.y);
+#if CONTACT
   float vis = contactVisibility(vPos, n);
+#else
+  float vis = 1.0;
+#endif
   ambient *= vis;
   shadow *= mix(1.0, vis, 0.75);  // a contact shadow takes most direct light too
 #if GROUND
@@ -196,10 +200,10 @@ void main() {
 
 }  // namespace
 
-std::string meshVariantSource(bool shadows, bool ground, bool flat, bool jelly) {
+std::string meshVariantSource(bool shadows, bool ground, bool flat, bool jelly, bool contact) {
   return std::string("#version 330 core\n#define SHADOWS ") + (shadows ? "1" : "0") + "\n#define GROUND " +
          (ground ? "1" : "0") + "\n#define FLAT " + (flat ? "1" : "0") + "\n#define JELLY " + (jelly ? "1" : "0") +
-         "\n" + kLookGlsl + kMeshFsBody;
+         "\n#define CONTACT " + (contact ? "1" : "0") + "\n" + kLookGlsl + kMeshFsBody;
 }
 
 // FXAA-style anti-aliasing (after Lottes' FXAA, "console" variant): the luma of the 4 diagonal

@@ -1,6 +1,6 @@
 // Not a test: renders a representative 1280x720 scene (ground, gallows, a deforming ~5k-triangle
 // jelly, overlay) and prints per-stage timings; writes a PNG and an MP4 into the directory given
-// as argv[1] (default /tmp). Usage: render_speed [dir] [frames] [aa 0/1] [shadows 0/1] [ab]
+// as argv[1] (default /tmp). Usage: render_speed [dir] [frames] [aa 0/1] [shadows 0/1] [ab [all|smooth|contact]]
 // With "ab": no video; two renderers of the same scene, one with the look's extra passes off
 // (RenderSettings::smoothSilhouettes, contactShadows) and one with them on, draw alternate
 // frames (interleaved, so both see the same machine); prints the median drawing time of each
@@ -58,11 +58,13 @@ void squashBall(const MeshData& ball, int f, std::vector<float>& pos) {
   }
 }
 
-int abTiming(RenderSettings s, int frames) {
-  const MeshData ball = makeSphere({0.0f, 0.0f, 0.0f}, 0.6f, 50, 50);
+// which: "all", "smooth" (smoothSilhouettes only) or "contact" (contactShadows only) is what
+// the "off" renderer leaves out.
+int abTiming(RenderSettings s, int frames, const std::string& which, int rings, int segments) {
+  const MeshData ball = makeSphere({0.0f, 0.0f, 0.0f}, 0.6f, rings, segments);
   RenderSettings off = s;
-  off.smoothSilhouettes = false;
-  off.contactShadows = false;
+  off.smoothSilhouettes = which == "contact";
+  off.contactShadows = which == "smooth";
   Renderer a(off), b(s);
   const MeshId ia = buildScene(a, ball), ib = buildScene(b, ball);
   std::vector<double> ms[2];
@@ -78,15 +80,17 @@ int abTiming(RenderSettings s, int frames) {
       if (f > 0) ms[k].push_back(elapsed);  // the first frame compiles shaders
     }
     if (f == frames - 1) {
-      writePng("/tmp/springy_render_speed_look_off.png", a.readImage());
-      writePng("/tmp/springy_render_speed_look_on.png", b.readImage());
+      const std::string tag = std::to_string(ball.indices.size() / 3);
+      writePng("/tmp/springy_render_speed_look_off_" + tag + ".png", a.readImage());
+      writePng("/tmp/springy_render_speed_look_on_" + tag + ".png", b.readImage());
     }
   }
   const double before = median(ms[0]), after = median(ms[1]);
   std::printf(
-      "%dx%d, %d frames each, interleaved; median drawing ms (upload + render): look passes off %.2f, on %.2f "
-      "(%+.1f%%)\n",
-      s.width, s.height, frames - 1, before, after, 100.0 * (after / before - 1.0));
+      "%dx%d, ball of %zu triangles, %d frames each, interleaved; median drawing ms (upload + render): look "
+      "passes off %.2f, on %.2f (%+.1f%%; off: %s)\n",
+      s.width, s.height, ball.indices.size() / 3, frames - 1, before, after, 100.0 * (after / before - 1.0),
+      which == "all" ? "smooth silhouettes and contact shadows" : which.c_str());
   return 0;
 }
 
@@ -100,7 +104,11 @@ int main(int argc, char** argv) {
   s.height = 720;
   s.antiAlias = argc > 3 ? std::stoi(argv[3]) != 0 : true;
   s.shadows = argc > 4 ? std::stoi(argv[4]) != 0 : true;
-  if (argc > 5 && std::string(argv[5]) == "ab") return abTiming(s, frames);
+  if (argc > 5 && std::string(argv[5]) == "ab") {
+    // The sample's fine ball (drawn as it is), then a coarse one (as the 146-vertex ball; refined).
+    abTiming(s, frames, argc > 6 ? argv[6] : "all", 50, 50);
+    return abTiming(s, frames, argc > 6 ? argv[6] : "all", 9, 18);
+  }
   Renderer r(s);
   std::printf("%s, AA %s, shadows %s\n", r.glInfo().c_str(), s.antiAlias ? "on" : "off", s.shadows ? "on" : "off");
 

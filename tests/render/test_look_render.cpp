@@ -17,18 +17,11 @@
 #include "test_util.h"
 
 using namespace springy::render;
+using springy::render::test::dump;
 using springy::render::test::luminance;
 using springy::render::test::pixel;
 using springy::render::test::regionMean;
 using springy::render::test::small;
-
-namespace {
-
-void dump(const Image& img, const std::string& name) {
-  if (const char* dir = std::getenv("SPRINGY_RENDER_DUMP")) writePng(std::string(dir) + "/" + name, img);
-}
-
-}  // namespace
 
 // Per channel, a brighter linear input never gives a darker display value, from black to 16x
 // over white; the curve reaches white and stays below it before (no hard clip at 1.0).

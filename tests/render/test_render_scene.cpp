@@ -17,19 +17,11 @@
 #include "test_util.h"
 
 using namespace springy::render;
+using springy::render::test::dump;
 using springy::render::test::luminance;
 using springy::render::test::pixel;
 using springy::render::test::regionMean;
 using springy::render::test::small;
-
-namespace {
-
-// Optional: SPRINGY_RENDER_DUMP=dir writes the test frames as PNGs for a human to look at.
-void dump(const Image& img, const std::string& name) {
-  if (const char* dir = std::getenv("SPRINGY_RENDER_DUMP")) writePng(std::string(dir) + "/" + name, img);
-}
-
-}  // namespace
 
 enum class Aa { None, Fxaa, Msaa };
 RenderSettings withAa(RenderSettings s, Aa aa) {

@@ -1,9 +1,12 @@
 // Why: pixel access helpers shared by the render tests (images are RGBA8, rows top-down).
 #pragma once
 #include <cstdint>
+#include <cstdlib>
 #include <glm/glm.hpp>
+#include <string>
 #include <vector>
 
+#include "render/image.h"
 #include "render/renderer.h"
 
 namespace springy::render::test {
@@ -37,6 +40,11 @@ inline RenderSettings small(int w = 64, int h = 48, bool aa = false) {
   s.antiAlias = aa;
   s.shadowMapSize = 1024;
   return s;
+}
+
+// Optional: SPRINGY_RENDER_DUMP=dir writes the test frames as PNGs for a human to look at.
+inline void dump(const Image& img, const std::string& name) {
+  if (const char* dir = std::getenv("SPRINGY_RENDER_DUMP")) writePng(std::string(dir) + "/" + name, img);
 }
 
 inline float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }

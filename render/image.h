@@ -23,7 +23,7 @@ void writePng(const std::string& path, int width, int height, std::span<const st
 inline void writePng(const std::string& path, const Image& image) {
   writePng(path, image.width, image.height, image.rgba);
 }
-// Reads any PNG as RGBA8 top-down. Throws RenderError naming the path on failure.
+// Reads any PNG (or baseline JPEG) as RGBA8 top-down. Throws RenderError naming the path on failure.
 Image readPng(const std::string& path);
 
 struct ContactSheetOptions {

@@ -13,6 +13,8 @@
 #include "render/error.h"
 #include "render/gl_context.h"
 #include "render/gl_program.h"
+#include "render/look.h"
+#include "render/refine.h"
 #include "render/shaders.h"
 #include "render/shadow_fit.h"
 
@@ -33,6 +35,11 @@ struct GpuMesh {
   std::vector<float> interleaved;      // position + normal per vertex
   Material material;
   Bounds bounds;
+  // Drawn from a finer surface than given (PN triangles, refine.h): coarse `indices` give the
+  // normals the patches need; the buffers hold the refined mesh.
+  PnRefinement refinement;
+  std::vector<glm::vec3> coarsePos, coarseNormals, refinedPos;
+  int occluder = -1;  // this frame's index in the contact-shadow occluder list
   bool dynamic = false;
   bool hasPositions = false;
   // Ground only:
@@ -51,7 +58,25 @@ void checkTriangles(std::span<const std::uint32_t> tris, std::size_t vertexCount
                         std::to_string(vertexCount) + " vertices)");
 }
 
-glm::vec3 toLinear(glm::vec3 c) { return glm::pow(glm::max(c, glm::vec3(0.0f)), glm::vec3(2.2f)); }
+glm::vec3 toLinear(glm::vec3 c) { return srgbToLinear(c); }
+
+constexpr int kMaxOccluders = 16;  // MAX_OCCLUDERS in the mesh shader
+
+// Area-weighted smooth vertex normals of a triangle mesh (unit; (0, 1, 0) where undefined).
+void smoothNormals(std::span<const glm::vec3> p, std::span<const std::uint32_t> tris, std::vector<glm::vec3>& normals) {
+  normals.assign(p.size(), glm::vec3(0.0f));
+  for (std::size_t t = 0; t + 2 < tris.size(); t += 3) {
+    const std::uint32_t a = tris[t], b = tris[t + 1], c = tris[t + 2];
+    const glm::vec3 n = glm::cross(p[b] - p[a], p[c] - p[a]);  // |n| = 2 * area
+    normals[a] += n;
+    normals[b] += n;
+    normals[c] += n;
+  }
+  for (glm::vec3& n : normals) {
+    const float len = glm::length(n);
+    n = len > 0.0f && std::isfinite(len) ? n / len : glm::vec3(0, 1, 0);
+  }
+}
 
 }  // namespace
 
@@ -59,14 +84,18 @@ glm::vec3 toLinear(glm::vec3 c) { return glm::pow(glm::max(c, glm::vec3(0.0f)), 
 struct Renderer::Impl {
   RenderSettings settings;
   GlContext ctx;
-  // Mesh shader variants, compiled on first use: index = shadows | ground << 1 | flat << 2.
-  std::optional<Program> meshProgs[8];
+  // Mesh shader variants, compiled on first use: index = shadows | ground << 1 | flat << 2 |
+  // jelly << 3 | contact << 4.
+  std::optional<Program> meshProgs[32];
   Program depthProg, skyProg, overlayProg, fxaaEdgeProg, fxaaProg;
   // Per frame: which mesh variants got this frame's shared uniforms, and what they are.
   unsigned framePrepared = 0;
   struct FrameUniforms {
     glm::mat4 viewProj{1.0f}, lightVP{1.0f};
     float normalOffset = 0.0f;
+    glm::vec3 ambientSky{0.0f}, ambientGround{0.0f};
+    int occluders = 0;
+    glm::vec3 occCentre[kMaxOccluders], occRadii[kMaxOccluders];
   } frameUniforms;
   Program* current = nullptr;
   GLuint emptyVao = 0;
@@ -155,10 +184,14 @@ struct Renderer::Impl {
     GpuMesh m;
     m.vertexCount = vertexCount;
     m.indices.assign(tris.begin(), tris.end());
-    m.indexCount = static_cast<GLsizei>(tris.size());
     m.material = mat;
     m.dynamic = dynamic;
-    m.interleaved.assign(vertexCount * 6, 0.0f);
+    if (dynamic && !mat.flat && settings.smoothSilhouettes)
+      m.refinement = PnRefinement(tris, vertexCount, PnRefinement::levelFor(tris.size() / 3));
+    const std::vector<std::uint32_t>& drawn = m.refinement.active() ? m.refinement.triangles() : m.indices;
+    const std::size_t drawnVertices = m.refinement.active() ? m.refinement.vertexCount() : vertexCount;
+    m.indexCount = static_cast<GLsizei>(drawn.size());
+    m.interleaved.assign(drawnVertices * 6, 0.0f);
     glGenVertexArrays(1, &m.vao);
     glGenBuffers(1, &m.vbo);
     glGenBuffers(1, &m.ebo);
@@ -167,9 +200,8 @@ struct Renderer::Impl {
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(m.interleaved.size() * sizeof(float)),
                  nullptr, dynamic ? GL_STREAM_DRAW : GL_STATIC_DRAW);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m.ebo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-                 static_cast<GLsizeiptr>(m.indices.size() * sizeof(std::uint32_t)),
-                 m.indices.data(), GL_STATIC_DRAW);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(drawn.size() * sizeof(std::uint32_t)), drawn.data(),
+                 GL_STATIC_DRAW);
     const auto stride = static_cast<GLsizei>(6 * sizeof(float));
     glEnableVertexAttribArray(0);
     glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, nullptr);
@@ -181,29 +213,26 @@ struct Renderer::Impl {
     return static_cast<MeshId>(meshes.size() - 1);
   }
 
-  // Area-weighted smooth normals, interleaved with positions, uploaded to the VBO.
+  // Area-weighted smooth normals, interleaved with positions, uploaded to the VBO. A refined
+  // mesh: the coarse normals shape the PN patches, the refined surface gets its own normals.
   void setPositions(GpuMesh& m, std::span<const float> pos) {
     if (pos.size() != m.vertexCount * 3)
       throw RenderError("Renderer: got " + std::to_string(pos.size()) + " position floats for " +
                         std::to_string(m.vertexCount) + " vertices");
-    std::vector<glm::vec3> normals(m.vertexCount, glm::vec3(0.0f));
-    auto P = [&](std::uint32_t i) {
-      return glm::vec3(pos[3 * std::size_t{i}], pos[3 * std::size_t{i} + 1], pos[3 * std::size_t{i} + 2]);
-    };
-    for (std::size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-      const std::uint32_t a = m.indices[t], b = m.indices[t + 1], c = m.indices[t + 2];
-      const glm::vec3 pa = P(a);
-      const glm::vec3 n = glm::cross(P(b) - pa, P(c) - pa);  // |n| = 2 * area
-      normals[a] += n;
-      normals[b] += n;
-      normals[c] += n;
+    m.coarsePos.resize(m.vertexCount);
+    for (std::size_t i = 0; i < m.vertexCount; ++i) m.coarsePos[i] = {pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]};
+    smoothNormals(m.coarsePos, m.indices, m.coarseNormals);
+    const std::vector<glm::vec3>* drawnPos = &m.coarsePos;
+    const std::vector<glm::vec3>* drawnNormals = &m.coarseNormals;
+    if (m.refinement.active()) {
+      m.refinement.evaluate(m.coarsePos, m.coarseNormals, m.refinedPos);
+      smoothNormals(m.refinedPos, m.refinement.triangles(), m.coarseNormals);  // reused as scratch
+      drawnPos = &m.refinedPos;
     }
     Bounds b;
-    for (std::size_t i = 0; i < m.vertexCount; ++i) {
-      const glm::vec3 p(pos[3 * i], pos[3 * i + 1], pos[3 * i + 2]);
+    for (std::size_t i = 0; i < drawnPos->size(); ++i) {
+      const glm::vec3 p = (*drawnPos)[i], n = (*drawnNormals)[i];
       b.add(p);
-      const float len = glm::length(normals[i]);
-      const glm::vec3 n = len > 0.0f && std::isfinite(len) ? normals[i] / len : glm::vec3(0, 1, 0);
       float* out = m.interleaved.data() + 6 * i;
       out[0] = p.x, out[1] = p.y, out[2] = p.z, out[3] = n.x, out[4] = n.y, out[5] = n.z;
     }
@@ -279,11 +308,12 @@ struct Renderer::Impl {
     if (current != &p) p.use(), current = &p;
   }
 
-  Program& meshProgram(bool shadowsOn, const GpuMesh& m) {
-    const unsigned key = (shadowsOn ? 1u : 0u) | (m.ground ? 2u : 0u) | (m.material.flat && !m.ground ? 4u : 0u);
+  Program& meshProgram(bool shadowsOn, const GpuMesh& m, bool contactOn) {
+    const unsigned key = (shadowsOn ? 1u : 0u) | (m.ground ? 2u : 0u) | (m.material.flat && !m.ground ? 4u : 0u) |
+                         (jelly(m) ? 8u : 0u) | (contactOn ? 16u : 0u);
     std::optional<Program>& p = meshProgs[key];
     if (!p) {
-      const std::string fs = meshVariantSource(key & 1u, key & 2u, key & 4u);
+      const std::string fs = meshVariantSource(key & 1u, key & 2u, key & 4u, key & 8u, key & 16u);
       p.emplace(kMeshVs, fs.c_str(), "mesh");
     }
     use(*p);
@@ -294,7 +324,13 @@ struct Renderer::Impl {
       p->set("uNormalOffset", frameUniforms.normalOffset);
       p->set("uToLight", -glm::normalize(light.direction));
       p->set("uLightColour", light.colour);
-      p->set("uAmbient", light.ambient);
+      p->set("uAmbientSky", frameUniforms.ambientSky);
+      p->set("uAmbientGround", frameUniforms.ambientGround);
+      p->set("uOccluderCount", frameUniforms.occluders);
+      if (frameUniforms.occluders > 0) {
+        glUniform3fv(p->loc("uOccCentre"), frameUniforms.occluders, &frameUniforms.occCentre[0].x);
+        glUniform3fv(p->loc("uOccRadii"), frameUniforms.occluders, &frameUniforms.occRadii[0].x);
+      }
       p->set("uEye", camera.position);
       p->set("uShadowStep",
              settings.shadowSoftness / static_cast<float>(std::max(shadowSize, 1)));
@@ -306,13 +342,18 @@ struct Renderer::Impl {
     return *p;
   }
 
-  // layerAlpha: a translucent body is drawn as two layers (inside, then outside); each gets the
-  // alpha that makes the pair as opaque as material.alpha: 1 - (1 - a')^2 = a.
-  void drawMesh(bool shadowsOn, const GpuMesh& m, bool twoLayers = false) {
-    Program& p = meshProgram(shadowsOn, m);
-    const float alpha = std::clamp(m.material.alpha, 0.0f, 1.0f);
+  // Translucent bodies are shaded as gelatine (the JELLY variant).
+  static bool jelly(const GpuMesh& m) { return !m.ground && m.material.alpha < 1.0f; }
+
+  // Whether another body than m itself darkens it (the CONTACT variant is needed).
+  bool contactOn(const GpuMesh& m) const { return frameUniforms.occluders > (m.occluder >= 0 ? 1 : 0); }
+
+  void drawMesh(bool shadowsOn, const GpuMesh& m) { drawMesh(shadowsOn, m, contactOn(m)); }
+  void drawMesh(bool shadowsOn, const GpuMesh& m, bool contact) {
+    Program& p = meshProgram(shadowsOn, m, contact);
     p.set("uAlbedo", toLinear(m.material.colour));
-    p.set("uAlpha", twoLayers ? 1.0f - std::sqrt(1.0f - alpha) : alpha);
+    p.set("uAlpha", std::clamp(m.material.alpha, 0.0f, 1.0f));
+    p.set("uSelf", m.occluder);
     if (m.ground) {
       p.set("uGroundOrigin", m.groundOrigin);
       p.set("uGroundU", m.groundU);
@@ -365,7 +406,40 @@ struct Renderer::Impl {
     if (overlayDirty) rebuildOverlay();
     const float aspect = static_cast<float>(settings.width) / static_cast<float>(settings.height);
     frameUniforms.viewProj = camera.viewProjection(aspect);
+    prepareLook();
     return t0;
+  }
+
+  // Hemisphere ambient and contact-shadow occluders for this frame.
+  // Ambient: the scene's grey ambient a, from above tinted by the sky's top colour, from below at
+  // half strength tinted by the (first) ground's colour, each tint of luminance 1 and mixed
+  // 35% into white (brightness as before: 1.0 a from above, 0.5 a from below).
+  // Occluders: each dynamic body (the first kMaxOccluders) as the ellipsoid inscribed in its
+  // bounding box.
+  void prepareLook() {
+    const auto tint = [](glm::vec3 linear) {
+      const float lum = glm::dot(linear, glm::vec3(0.2126f, 0.7152f, 0.0722f));
+      return lum > 1e-4f ? glm::mix(glm::vec3(1.0f), linear / lum, 0.35f) : glm::vec3(1.0f);
+    };
+    glm::vec3 groundColour = toLinear(skyBottom);
+    for (const GpuMesh& m : meshes)
+      if (m.ground) {
+        groundColour = 0.5f * (toLinear(m.material.colour) + toLinear(m.groundB));
+        break;
+      }
+    frameUniforms.ambientSky = light.ambient * tint(toLinear(skyTop));
+    frameUniforms.ambientGround = 0.5f * light.ambient * tint(groundColour);
+    frameUniforms.occluders = 0;
+    for (GpuMesh& m : meshes) {
+      m.occluder = -1;
+      if (!settings.contactShadows || !m.dynamic || !drawable(m) || frameUniforms.occluders == kMaxOccluders) continue;
+      const glm::vec3 half = 0.5f * (m.bounds.hi - m.bounds.lo);
+      const float biggest = std::max({half.x, half.y, half.z});
+      if (!(biggest > 0.0f) || !std::isfinite(biggest)) continue;
+      m.occluder = frameUniforms.occluders++;
+      frameUniforms.occCentre[m.occluder] = 0.5f * (m.bounds.hi + m.bounds.lo);
+      frameUniforms.occRadii[m.occluder] = glm::max(half, glm::vec3(0.05f * biggest));
+    }
   }
 
   // Depth from the light of every drawable mesh but the grounds, into the shadow map fitted to
@@ -445,23 +519,57 @@ struct Renderer::Impl {
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(1.0f, 4.0f);
     for (const GpuMesh* g : grounds) {
+      // Contact shadows where some body's reach meets this ground on screen (none: unbounded).
+      std::optional<glm::ivec4> contactRect;
+      bool contact = false;
+      if (frameUniforms.occluders > 0) {
+        contactRect = contactFootprint(*g);
+        contact = !contactRect || ((*contactRect)[2] > 0 && (*contactRect)[3] > 0);
+      }
       const std::optional<glm::ivec4> rect =
           shadowsOn ? shadowFootprint(g->groundOrigin, g->groundU, g->groundV, light.direction, frameUniforms.lightVP,
                                       frameUniforms.viewProj, settings.width, settings.height)
                     : std::nullopt;
-      if (!rect) {
-        drawMesh(shadowsOn, *g);
+      if ((shadowsOn && !rect) || (contact && !contactRect) || (!shadowsOn && !contact)) {
+        drawMesh(shadowsOn, *g, contact);  // everywhere, with all it needs
         continue;
       }
-      drawMesh(false, *g);
-      if ((*rect)[2] <= 0 || (*rect)[3] <= 0) continue;  // the footprint is off screen
+      drawMesh(false, *g, false);
+      // Shadow taps and contact shadows inside the rectangle that holds both footprints (outside
+      // the shadow map's, its taps return "lit"; outside the contact one, the occlusion is 0).
+      glm::ivec2 lo(settings.width, settings.height), hi(0, 0);
+      for (const std::optional<glm::ivec4>& r : {rect, contactRect}) {
+        if (!r || (*r)[2] <= 0 || (*r)[3] <= 0) continue;
+        lo = glm::min(lo, glm::ivec2((*r)[0], (*r)[1]));
+        hi = glm::max(hi, glm::ivec2((*r)[0] + (*r)[2], (*r)[1] + (*r)[3]));
+      }
+      if (hi.x <= lo.x || hi.y <= lo.y) continue;  // both off screen
       glEnable(GL_SCISSOR_TEST);
-      glScissor((*rect)[0], (*rect)[1], (*rect)[2], (*rect)[3]);
-      drawMesh(true, *g);
+      glScissor(lo.x, lo.y, hi.x - lo.x, hi.y - lo.y);
+      drawMesh(shadowsOn, *g, contact);
       glDisable(GL_SCISSOR_TEST);
     }
     glDisable(GL_POLYGON_OFFSET_FILL);
     mark(RenderPass::Ground);
+  }
+
+  // The screen rectangle where contact shadows can fall on ground g: every occluder's box of 2.5
+  // of its radii (beyond it the shader's occlusion is exactly 0) that reaches the ground, dropped
+  // onto it. Empty (width 0) when none reaches it; none when unbounded (behind the camera).
+  std::optional<glm::ivec4> contactFootprint(const GpuMesh& g) const {
+    const glm::vec3 n = glm::normalize(glm::cross(g.groundU, g.groundV));
+    std::vector<glm::vec3> corners;
+    for (int i = 0; i < frameUniforms.occluders; ++i) {
+      const glm::vec3 c = frameUniforms.occCentre[i], r = frameUniforms.occRadii[i];
+      if (std::abs(glm::dot(c - g.groundOrigin, n)) > 2.5f * glm::length(r * n)) continue;  // out of reach
+      for (int k = 0; k < 8; ++k) {
+        const glm::vec3 s((k & 1) ? 1.0f : -1.0f, (k & 2) ? 1.0f : -1.0f, (k & 4) ? 1.0f : -1.0f);
+        const glm::vec3 p = c + 2.5f * s * r;
+        corners.push_back(p - n * glm::dot(p - g.groundOrigin, n));
+      }
+    }
+    if (corners.empty()) return glm::ivec4(0);
+    return screenRect(corners, frameUniforms.viewProj, settings.width, settings.height, 2.0f);
   }
 
   // The sky on the far plane, after the opaque meshes: early depth testing leaves out every
@@ -478,22 +586,30 @@ struct Renderer::Impl {
     mark(RenderPass::Sky);
   }
 
-  // Translucent meshes back to front (by their bounds' centres), blended, without depth writes;
-  // each as two layers: its inside (far) faces, then its outside.
+  // Translucent meshes back to front (by their bounds' centres), blended (premultiplied alpha).
+  // Of each only its nearest surface is drawn: a depth-only prepass of its front faces, then
+  // the front faces where they are that nearest depth (LEQUAL). Its far side and its inner folds
+  // never show through (a fan of bottom triangles would show as a star); how much of what is
+  // behind shows is the shader's thickness-driven opacity.
   void translucentPass(bool shadowsOn) {
     if (translucent.empty()) return;
     auto dist = [&](const GpuMesh* m) { return glm::length(0.5f * (m->bounds.lo + m->bounds.hi) - camera.position); };
     std::sort(translucent.begin(), translucent.end(),
               [&](const GpuMesh* a, const GpuMesh* b) { return dist(a) > dist(b); });
     glEnable(GL_BLEND);
-    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
-    glDepthMask(GL_FALSE);
+    glBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
     glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
     for (const GpuMesh* m : translucent) {
-      glCullFace(GL_FRONT);  // inside (far) faces first, then the near ones
-      drawMesh(shadowsOn, *m, true);
-      glCullFace(GL_BACK);
-      drawMesh(shadowsOn, *m, true);
+      glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+      glDepthMask(GL_TRUE);
+      use(depthProg);
+      depthProg.set("uLightViewProj", frameUniforms.viewProj);
+      glBindVertexArray(m->vao);
+      glDrawElements(GL_TRIANGLES, m->indexCount, GL_UNSIGNED_INT, nullptr);
+      glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+      glDepthMask(GL_FALSE);
+      drawMesh(shadowsOn, *m);
     }
     glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);

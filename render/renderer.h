@@ -4,7 +4,8 @@
 // and an overlay text block. It knows nothing about the simulation.
 //
 // Threading: a Renderer and its GL context belong to the thread that created it.
-// Colours are display (sRGB-like) values in 0..1; lighting is done in linear space.
+// Colours are display (sRGB) values in 0..1; lighting is done in linear light, then the tone
+// curve and the sRGB encoding (look.h) give the display value, inside the shading pass.
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -24,8 +25,11 @@ namespace springy::render {
 
 struct Material {
   glm::vec3 colour{0.8f, 0.3f, 0.2f};  // display colour, 0..1
-  // < 1: translucent (e.g. jelly 0.7): drawn after opaque meshes, back to front, without depth
-  // writes; a closed body's far and near sides together block `alpha` of what is behind.
+  // < 1: translucent, shaded as gelatine (e.g. jelly 0.7): drawn after opaque meshes, back to
+  // front; only its nearest surface (front faces: wind triangles counter-clockwise from
+  // outside); it blocks `alpha` of what is behind where it is 0.7 of its thickness (n.v = 0.7),
+  // less at its thin rim, more through its middle; wrap diffuse, light through thin parts,
+  // specular at least 0.9 and a Fresnel rim.
   float alpha = 1.0f;
   float shininess = 32.0f;   // Blinn-Phong exponent
   float specular = 0.25f;    // highlight strength, 0 = matte
@@ -36,7 +40,9 @@ struct Material {
 struct Light {
   glm::vec3 direction{-0.35f, -1.0f, -0.45f};
   glm::vec3 colour{0.9f, 0.88f, 0.82f};  // linear intensity of the direct light
-  glm::vec3 ambient{0.28f, 0.30f, 0.34f};  // linear ambient (hemispherical: less from below)
+  // Linear ambient: from above tinted by the sky's top colour, from below half as strong, tinted
+  // by the ground's colour (a hemisphere light).
+  glm::vec3 ambient{0.28f, 0.30f, 0.34f};
 };
 
 // How edges are anti-aliased when RenderSettings::antiAlias is on.
@@ -57,6 +63,13 @@ struct RenderSettings {
   // third of a 720p frame's height gets 1024, not 2048 (4x fewer depth texels to rasterise).
   bool fitShadowMap = true;
   float shadowSoftness = 1.0f;  // PCF tap spacing in shadow-map texels
+  // Smooth silhouettes: dynamic meshes that are not flat-shaded are drawn from PN triangles
+  // (refine.h) bound to their vertices, each triangle as 9 or 4 (about 12k triangles per mesh at
+  // most; meshes of more than 3000 triangles, fine enough, as they are).
+  bool smoothSilhouettes = true;
+  // Contact shadows: every dynamic mesh (the first 16) darkens the ambient (and 3/4 of the direct
+  // light) of the ground and the other meshes near it (analytic ellipsoid occlusion).
+  bool contactShadows = true;
   std::string fontPath = kDefaultFontPath;  // overlay font (loaded only if overlay text is set)
   float overlayPixelHeight = 0.0f;  // 0: height / 36, at least 12 px
   // Measure each pass (glFinish after each): fills RenderTimings::passMs. Costs a little speed

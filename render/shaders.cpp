@@ -26,7 +26,37 @@ void main() {
 }
 )";
 
-// Compiled in variants (see meshVariantSource): SHADOWS, GROUND and FLAT are preprocessor
+// The look shared by every shaded pixel and by toneCurveOnGpu (look.h): the sRGB transfer
+// functions (IEC 61966-2-1) and the tone curve. The curve is the highlight shoulder of Khronos
+// PBR Neutral (Khronos 3D Commerce, "PBR Neutral Specification", 2024): identity below a knee,
+// above it the peak channel is compressed as newPeak = 1 - d^2 / (peak + d - knee), d = 1 - knee
+// (value and slope continuous at the knee), every channel scaled by newPeak / peak (hue kept)
+// and mixed towards white by g = 1 - 1 / (0.15 (peak - newPeak) + 1). Two deviations, both so
+// that the colours a scene names come out as named: the knee is 0.9 (PBR Neutral: 0.76), above
+// the brightest documented sky colour (0.95 display = 0.89 linear), and there is no 0.04
+// black offset (PBR Neutral removes the F0 reflection every one of its surfaces adds; ours add
+// none). What it changes: a highlight that used to clip per channel (a pink's highlight turned
+// yellow-white at 1.0 red) now rolls off towards white with its hue.
+const char* const kLookGlsl = R"(
+vec3 srgbEncode(vec3 c) {
+  c = clamp(c, 0.0, 1.0);
+  return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
+}
+vec3 toneMap(vec3 c) {
+  const float knee = 0.9;
+  const float d = 1.0 - knee;
+  c = max(c, vec3(0.0));
+  float peak = max(c.r, max(c.g, c.b));
+  if (peak < knee) return c;
+  float newPeak = 1.0 - d * d / (peak + d - knee);
+  c *= newPeak / peak;
+  float g = 1.0 - 1.0 / (0.15 * (peak - newPeak) + 1.0);
+  return mix(c, vec3(newPeak), g);
+}
+vec3 toDisplay(vec3 c) { return srgbEncode(toneMap(c)); }
+)";
+
+// Compiled in variants (see meshVariantSource): SHADOWS, GROUND, FLAT, JELLY and CONTACT are preprocessor
 // switches, so a fragment only runs the code its mesh needs (llvmpipe executes both sides of a
 // branch, even on a uniform).
 namespace {
@@ -41,7 +71,8 @@ uniform float uShininess;
 uniform float uSpecular;
 uniform vec3 uToLight;      // unit vector towards the light
 uniform vec3 uLightColour;
-uniform vec3 uAmbient;
+uniform vec3 uAmbientSky;   // hemisphere ambient: linear light from straight above ...
+uniform vec3 uAmbientGround;  // ... and from straight below
 uniform vec3 uEye;
 uniform sampler2DShadow uShadowMap;
 uniform float uShadowStep;  // PCF tap spacing, shadow-map uv units
@@ -54,9 +85,13 @@ uniform float uGroundExtent;
 uniform vec3 uSkyTop;
 uniform vec3 uSkyBottom;
 uniform float uHeight;
+// Contact shadows: every body as the ellipsoid inscribed in its bounding box.
+#define MAX_OCCLUDERS 16
+uniform int uOccluderCount;
+uniform vec3 uOccCentre[MAX_OCCLUDERS];
+uniform vec3 uOccRadii[MAX_OCCLUDERS];
+uniform int uSelf;          // this mesh's occluder index, -1 if it is none
 out vec4 fragColour;
-
-vec3 toDisplay(vec3 c) { return pow(clamp(c, 0.0, 1.0), vec3(1.0 / 2.2)); }
 
 #if SHADOWS
 float shadowFactor() {
@@ -72,6 +107,26 @@ float shadowFactor() {
   return s * 0.25;
 }
 #endif
+
+// Analytic occlusion by the other bodies, each body an ellipsoid scaled to the unit sphere (the
+// normal by the inverse transpose). The sphere's form factor is cos(theta) (r / d)^2 (Quilez,
+// "Sphere ambient occlusion", 2013); a contact shadow should read at a glance, so this uses the
+// slower cos(theta) r / d, times 1.2, faded to nothing between 1 and 2.5 radii from the centre
+// (ground more than 1.25 body sizes from its centre keeps its exact colour). 1 = unoccluded.
+float contactVisibility(vec3 p, vec3 n) {
+  float vis = 1.0;
+  for (int i = 0; i < uOccluderCount; ++i) {
+    if (i == uSelf) continue;
+    vec3 r = uOccRadii[i];
+    vec3 q = (p - uOccCentre[i]) / r;
+    float d2 = dot(q, q);
+    float d = sqrt(d2);
+    float cosTheta = clamp(-dot(normalize(n * r), q) / max(d, 1e-4), 0.0, 1.0);
+    float fade = smoothstep(2.5, 1.0, d);
+    vis *= 1.0 - min(1.2 * cosTheta / max(d, 1.0), 1.0) * fade;
+  }
+  return vis;
+}
 
 void main() {
 #if FLAT
@@ -89,7 +144,15 @@ void main() {
 #else
   float shadow = 1.0;
 #endif
-  float hemi = 0.75 + 0.25 * n.y;
+  // Hemisphere ambient: sky light from above, light bounced off the ground from below.
+  vec3 ambient = mix(uAmbientGround, uAmbientSky, 0.5 + 0.5 * n.y);
+#if CONTACT
+  float vis = contactVisibility(vPos, n);
+#else
+  float vis = 1.0;
+#endif
+  ambient *= vis;
+  shadow *= mix(1.0, vis, 0.75);  // a contact shadow takes most direct light too
 #if GROUND
   vec3 d = vPos - uGroundOrigin;
   vec2 uv = vec2(dot(d, uGroundU), dot(d, uGroundV)) / uTile;
@@ -98,16 +161,38 @@ void main() {
   vec2 i = 2.0 * (abs(fract((uv - 0.5 * w) * 0.5) - 0.5) - abs(fract((uv + 0.5 * w) * 0.5) - 0.5)) / w;
   vec3 albedo = mix(uAlbedo, uGroundB, 0.5 - 0.5 * i.x * i.y);
   float fog = smoothstep(0.55, 1.0, length(d) / uGroundExtent);
-  vec3 lit = albedo * (uAmbient * hemi + uLightColour * ndl * shadow);
+  vec3 lit = albedo * (ambient + uLightColour * ndl * shadow);
   // The ground fades into the sky towards its edge: the sky's colour at this pixel (as the sky
   // pass draws it), mixed in here, so the sky is only drawn where nothing else is.
   float t = clamp((gl_FragCoord.y - 0.5) / max(uHeight - 1.0, 1.0), 0.0, 1.0);
   fragColour = vec4(mix(toDisplay(lit), mix(uSkyBottom, uSkyTop, t), fog), uAlpha);
+#elif JELLY
+  // Gelatine (translucent bodies; only their nearest surface is drawn, see translucentPass).
+  vec3 v = normalize(uEye - vPos);
+  float ndv = clamp(dot(n, v), 0.0, 1.0);
+  vec3 h = normalize(l + v);
+  // Wrap diffuse (light reaching round the terminator, as through a scattering solid).
+  float wrap = max(dot(n, l) + 0.5, 0.0) / 1.5;
+  // Thickness along the view ray: for a rounded body the chord through this point, ~ n.v of
+  // its diameter: thin at the rim. Light from behind comes through thin parts.
+  float thick = ndv;
+  float transmit = exp(-3.0 * thick) * (0.5 + 0.5 * max(dot(-l, v), 0.0));
+  vec3 body = uAlbedo * (ambient + uLightColour * (wrap * shadow + 0.8 * transmit));
+  // Strong specular and a Fresnel rim (Schlick 1994, F0 = 0.04 for water-like gelatine)
+  // reflecting the hemisphere in the mirror direction: sky above, ground below.
+  float spec = ndl > 0.0 ? max(uSpecular, 0.9) * pow(max(dot(n, h), 0.0), uShininess) : 0.0;
+  float fresnel = 0.04 + 0.96 * pow(1.0 - ndv, 5.0);
+  vec3 env = mix(uAmbientGround, uAmbientSky, 0.5 + 0.5 * reflect(-v, n).y);
+  vec3 reflected = uLightColour * spec * shadow + fresnel * env;
+  // Opacity grows with the thickness: 1 - (1 - alpha)^(0.3 + n.v), alpha where n.v = 0.7.
+  float opacity = 1.0 - pow(1.0 - uAlpha, 0.3 + thick);
+  // Premultiplied: the body covers `opacity`, the reflection adds on top.
+  fragColour = vec4(min(toDisplay(body) * opacity + toDisplay(reflected), vec3(1.0)), opacity);
 #else
   vec3 v = normalize(uEye - vPos);
   vec3 h = normalize(l + v);
   float spec = ndl > 0.0 ? uSpecular * pow(max(dot(n, h), 0.0), uShininess) : 0.0;
-  vec3 lit = uAlbedo * (uAmbient * hemi + uLightColour * ndl * shadow) + uLightColour * spec * shadow;
+  vec3 lit = uAlbedo * (ambient + uLightColour * ndl * shadow) + uLightColour * spec * shadow;
   fragColour = vec4(toDisplay(lit), uAlpha);
 #endif
 }
@@ -115,10 +200,10 @@ void main() {
 
 }  // namespace
 
-std::string meshVariantSource(bool shadows, bool ground, bool flat) {
-  return std::string("#version 330 core\n#define SHADOWS ") + (shadows ? "1" : "0") +
-         "\n#define GROUND " + (ground ? "1" : "0") + "\n#define FLAT " + (flat ? "1" : "0") +
-         "\n" + kMeshFsBody;
+std::string meshVariantSource(bool shadows, bool ground, bool flat, bool jelly, bool contact) {
+  return std::string("#version 330 core\n#define SHADOWS ") + (shadows ? "1" : "0") + "\n#define GROUND " +
+         (ground ? "1" : "0") + "\n#define FLAT " + (flat ? "1" : "0") + "\n#define JELLY " + (jelly ? "1" : "0") +
+         "\n#define CONTACT " + (contact ? "1" : "0") + "\n" + kLookGlsl + kMeshFsBody;
 }
 
 // FXAA-style anti-aliasing (after Lottes' FXAA, "console" variant): the luma of the 4 diagonal
@@ -176,6 +261,7 @@ std::string fxaaSource(bool edgePass) {
 const char* const kDepthVs = R"(#version 330 core
 layout(location = 0) in vec3 aPos;
 uniform mat4 uLightViewProj;
+invariant gl_Position;  // also the translucent depth prepass, matched by the mesh shader
 void main() { gl_Position = uLightViewProj * vec4(aPos, 1.0); }
 )";
 const char* const kDepthFs = R"(#version 330 core

@@ -10,9 +10,13 @@ namespace springy::render {
 
 // Meshes: position + normal in, world position, normal and light-space position out.
 extern const char* const kMeshVs;
+// The sRGB encoding and the tone curve (GLSL functions srgbEncode, toneMap, toDisplay).
+extern const char* const kLookGlsl;
 // The mesh fragment shader with SHADOWS (4-tap PCF), GROUND (box-filtered checker fading into
-// the sky) and FLAT (faceted normals from screen-space derivatives) switched on or off.
-std::string meshVariantSource(bool shadows, bool ground, bool flat);
+// the sky), FLAT (faceted normals from screen-space derivatives), JELLY (gelatine: wrap
+// diffuse, thickness-driven transmission and opacity, Fresnel rim; premultiplied alpha) and
+// CONTACT (contact shadows from the occluder list) switched on or off.
+std::string meshVariantSource(bool shadows, bool ground, bool flat, bool jelly, bool contact);
 
 // Shadow map: depth only, from the light.
 extern const char* const kDepthVs;

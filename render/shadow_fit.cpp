@@ -56,6 +56,23 @@ ShadowFit fitShadowMap(const Bounds& b, glm::vec3 lightDirection, const Camera& 
   return fit;
 }
 
+std::optional<glm::ivec4> screenRect(std::span<const glm::vec3> points, const glm::mat4& viewProj, int width,
+                                     int height, float margin) {
+  glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (const glm::vec3& p : points) {
+    const glm::vec4 clip = viewProj * glm::vec4(p, 1.0f);
+    if (!(clip.w > 1e-4f)) return std::nullopt;
+    const glm::vec2 ndc = glm::vec2(clip) / clip.w;
+    lo = glm::min(lo, ndc);
+    hi = glm::max(hi, ndc);
+  }
+  const glm::vec2 size(static_cast<float>(width), static_cast<float>(height));
+  const glm::vec2 pLo = glm::clamp((lo * 0.5f + 0.5f) * size - margin, glm::vec2(0.0f), size);
+  const glm::vec2 pHi = glm::clamp((hi * 0.5f + 0.5f) * size + margin, glm::vec2(0.0f), size);
+  const glm::ivec2 a(glm::floor(pLo)), b(glm::ceil(pHi));
+  return glm::ivec4(a.x, a.y, std::max(b.x - a.x, 0), std::max(b.y - a.y, 0));
+}
+
 std::optional<glm::ivec4> shadowFootprint(glm::vec3 planePoint, glm::vec3 planeU, glm::vec3 planeV,
                                           glm::vec3 lightDirection, const glm::mat4& lightViewProj,
                                           const glm::mat4& viewProj, int width, int height) {
@@ -64,23 +81,14 @@ std::optional<glm::ivec4> shadowFootprint(glm::vec3 planePoint, glm::vec3 planeU
   const float along = glm::dot(d, n);
   if (std::abs(along) < 0.05f) return std::nullopt;
   const glm::mat4 toWorld = glm::inverse(lightViewProj);
-  glm::vec2 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  glm::vec3 onPlane[4];
   for (int k = 0; k < 4; ++k) {
     const glm::vec4 w = toWorld * glm::vec4((k & 1) ? 1.0f : -1.0f, (k & 2) ? 1.0f : -1.0f, -1.0f, 1.0f);
     const glm::vec3 c = glm::vec3(w) / w.w;
-    const glm::vec3 onPlane = c + d * (glm::dot(planePoint - c, n) / along);
-    const glm::vec4 clip = viewProj * glm::vec4(onPlane, 1.0f);
-    if (!(clip.w > 1e-4f)) return std::nullopt;
-    const glm::vec2 ndc = glm::vec2(clip) / clip.w;
-    lo = glm::min(lo, ndc);
-    hi = glm::max(hi, ndc);
+    onPlane[k] = c + d * (glm::dot(planePoint - c, n) / along);
   }
-  // Pixels, widened by 4: the normal offset and the filter taps reach a little past the sides.
-  const glm::vec2 size(static_cast<float>(width), static_cast<float>(height));
-  const glm::vec2 pLo = glm::clamp((lo * 0.5f + 0.5f) * size - 4.0f, glm::vec2(0.0f), size);
-  const glm::vec2 pHi = glm::clamp((hi * 0.5f + 0.5f) * size + 4.0f, glm::vec2(0.0f), size);
-  const glm::ivec2 a(glm::floor(pLo)), b(glm::ceil(pHi));
-  return glm::ivec4(a.x, a.y, std::max(b.x - a.x, 0), std::max(b.y - a.y, 0));
+  // Widened by 4 pixels: the normal offset and the filter taps reach a little past the sides.
+  return screenRect(onPlane, viewProj, width, height, 4.0f);
 }
 
 }  // namespace springy::render

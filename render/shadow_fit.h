@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 #include <limits>
 #include <optional>
+#include <span>
 
 #include "render/camera.h"
 #include "render/renderer.h"
@@ -40,6 +41,12 @@ struct ShadowFit {
 // the casters are nearest `camera`; otherwise settings.shadowMapSize.
 ShadowFit fitShadowMap(const Bounds& casters, glm::vec3 lightDirection, const Camera& camera,
                        const RenderSettings& settings);
+
+// The screen rectangle (x, y, width, height in pixels, rows bottom-up as GL's scissor; empty
+// when off screen) around the points projected by viewProj, widened by `margin` pixels; none
+// (unbounded) when a point lies behind the camera.
+std::optional<glm::ivec4> screenRect(std::span<const glm::vec3> points, const glm::mat4& viewProj, int width,
+                                     int height, float margin);
 
 // The screen rectangle (x, y, width, height in pixels, rows bottom-up as GL's scissor; empty
 // when off screen) that holds every pixel of the plane through planePoint spanned by planeU and

@@ -308,7 +308,7 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.name = r.string("name", "body " + std::to_string(index + 1));
   const std::string shape =
       r.choice("shape", "octahedron_sphere",
-               {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mesh", "cloth"});
+               {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mould", "mesh", "cloth"});
   // cloth = true: an open surface, simulated as it is (docs/model.md §18); the cloth shape is one.
   b.cloth = r.boolean("cloth", shape == "cloth");
   if (shape == "cloth" && !b.cloth) {
@@ -328,6 +328,9 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
     } else if (shape == "jelly") {
       mesh = makeJelly(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("ridges", 8, 0, 64),
                        r.integer("rings", 10, 2, 200), r.integer("segments", 48, 3, 1000));
+    } else if (shape == "mould") {
+      mesh = makeMould(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("lobes", 8, 0, 64),
+                       r.integer("rings", 12, 2, 200), r.integer("segments", 32, 3, 1000));
     } else if (shape == "cloth") {
       const std::array<double, 2> size = positivePair(r, "size", {1.0, 1.0});
       const std::array<int, 2> resolution = integerPair(r, "resolution", {20, 20}, 1, kMaxClothResolution);

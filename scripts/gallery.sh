@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Regenerates the README's gallery: one contact sheet per showcase scene in docs/gallery/,
-# four stills each at moments that tell the scene's story, the last at the scene's end. Needs a
-# build (scripts/build.sh).
+# four stills each at moments that tell the scene's story, the last at the scene's end; and for
+# every scene the original project had, NAME_vs_original.png: the original's eight stills
+# (/work/shared/seed/original-stills, or $SPRINGY_ORIGINAL_STILLS) above ours, eight evenly
+# spaced from 0 to the scene's end, with the scene's camera (the original's). Needs a build
+# (scripts/build.sh, which also builds tests/render/vs_original).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 springy=${SPRINGY_BUILD_DIR:-build}/app/springy
@@ -31,4 +34,25 @@ for scene in "${!times[@]}"; do
   while [ "$(jobs -r | wc -l)" -ge 2 ]; do sleep 0.5; done
 done
 wait
+
+originals=${SPRINGY_ORIGINAL_STILLS:-/work/shared/seed/original-stills}
+vs=${SPRINGY_BUILD_DIR:-build}/tests/render/vs_original
+if [ -d "$originals" ]; then
+  tmp=$(mktemp -d)
+  trap 'rm -rf "$tmp"' EXIT
+  declare -A original=([bunny]=bunny [cube]=cube [fixed_single_sphere]=hangedSphere [jelly]=jelly
+                       [single_sphere]=oneSphere [ramp]=ramp [spheres]=spheres)
+  for scene in "${!original[@]}"; do
+    duration=$(sed -n 's/^duration *= *\([0-9.]*\).*/\1/p' "scenes/$scene.toml" | head -1)
+    times=$(awk -v d="$duration" 'BEGIN { for (i = 0; i < 8; i++) printf "%s%.2f", (i ? "," : ""), i * d / 7 }')
+    (
+      mkdir -p "$tmp/$scene"
+      "$springy" frames "scenes/$scene.toml" -o "$tmp/$scene" --sheet-only --width 320 --height 180 --times "$times"
+      "$vs" "$originals/${original[$scene]}.jpg" "$tmp/$scene/${scene}_sheet.png" "$out/${scene}_vs_original.png" \
+        "original (Unity, 2022): ${original[$scene]}, 8 stills over its video" "springy: scenes/$scene.toml, 8 stills from 0 to $duration s"
+    ) &
+    while [ "$(jobs -r | wc -l)" -ge 2 ]; do sleep 0.5; done
+  done
+  wait
+fi
 ls -la "$out"

@@ -1,10 +1,12 @@
 #include "sim/shapes.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <map>
 #include <utility>
+#include <vector>
 
 namespace springy {
 namespace {
@@ -209,6 +211,85 @@ TriMesh makeJelly(double radius, double height, int ridges, int rings, int segme
   }
   orient(m);
   // Centre on the bounding box.
+  const Vec3 c = boundsOf(m.positions).center();
+  for (Vec3& p : m.positions) p -= c;
+  return m;
+}
+
+TriMesh makeMould(double radius, double height, int lobes, int rings, int segments) {
+  assert(rings >= 2 && segments >= 3);
+  // The profile: (height, radius) as fractions of height and radius, from the base rim over
+  // the tiers to the top centre; interpolated by Catmull-Rom and resampled by arc length.
+  static const double kProfile[][2] = {{0.00, 0.90}, {0.04, 0.98}, {0.12, 1.00}, {0.30, 0.97},
+                                       {0.42, 0.92},                                             // lower tier
+                                       {0.48, 0.86}, {0.52, 0.76}, {0.55, 0.70},                 // shoulder
+                                       {0.62, 0.68}, {0.74, 0.65}, {0.82, 0.60},                 // upper tier
+                                       {0.89, 0.50}, {0.95, 0.34}, {0.99, 0.14}, {1.00, 0.00}};  // crown
+  constexpr int kPoints = static_cast<int>(sizeof kProfile / sizeof kProfile[0]);
+  auto point = [&](int i) {
+    i = std::clamp(i, 0, kPoints - 1);
+    return std::array<double, 2>{kProfile[i][0] * height, kProfile[i][1] * radius};
+  };
+  std::vector<std::array<double, 2>> dense;  // (y, r)
+  for (int i = 0; i + 1 < kPoints; ++i) {
+    const auto p0 = point(i - 1), p1 = point(i), p2 = point(i + 1), p3 = point(i + 2);
+    for (int k = 0; k < 32; ++k) {
+      const double t = k / 32.0, t2 = t * t, t3 = t2 * t;
+      std::array<double, 2> q;
+      for (int c = 0; c < 2; ++c) {
+        q[c] = 0.5 * (2 * p1[c] + (p2[c] - p0[c]) * t + (2 * p0[c] - 5 * p1[c] + 4 * p2[c] - p3[c]) * t2 +
+                      (3 * p1[c] - p0[c] - 3 * p2[c] + p3[c]) * t3);
+      }
+      dense.push_back(q);
+    }
+  }
+  dense.push_back(point(kPoints - 1));
+  std::vector<double> arc(dense.size(), 0.0);
+  for (std::size_t i = 1; i < dense.size(); ++i) {
+    arc[i] = arc[i - 1] + std::hypot(dense[i][0] - dense[i - 1][0], dense[i][1] - dense[i - 1][1]);
+  }
+  auto at = [&](double s) {  // (y, r) at arc length s
+    const auto it = std::lower_bound(arc.begin(), arc.end(), s);
+    const std::size_t i = std::clamp<std::size_t>(static_cast<std::size_t>(it - arc.begin()), 1, arc.size() - 1);
+    const double f = (s - arc[i - 1]) / std::max(arc[i] - arc[i - 1], 1e-12);
+    return std::array<double, 2>{dense[i - 1][0] + f * (dense[i][0] - dense[i - 1][0]),
+                                 dense[i - 1][1] + f * (dense[i][1] - dense[i - 1][1])};
+  };
+  auto lobed = [&](double r, double y, double phi) {
+    const double crown = std::clamp((y / height - 0.86) / 0.1, 0.0, 1.0);
+    const double a = 0.12 * (1.0 - crown * crown * (3 - 2 * crown));
+    return r * (1.0 - a + a * std::sqrt(std::fabs(std::cos(0.5 * lobes * phi))));
+  };
+  TriMesh m;
+  m.positions.push_back({0.0, 0.0, 0.0});  // base centre; then ring 0 (the base rim) upwards
+  for (int r = 0; r < rings; ++r) {
+    const auto [y, rr] = at(arc.back() * r / rings);
+    for (int k = 0; k < segments; ++k) {
+      const double phi = 2.0 * kPi * k / segments;
+      const double rl = lobed(rr, y, phi);
+      m.positions.push_back({rl * std::cos(phi), y, rl * std::sin(phi)});
+    }
+  }
+  const uint32_t inner = u32(m.positions.size());
+  for (int k = 0; k < segments; ++k) {  // the base's inner ring, half the rim's radius
+    const Vec3& rim = m.positions[1 + static_cast<std::size_t>(k)];
+    m.positions.push_back({0.5 * rim.x, 0.0, 0.5 * rim.z});
+  }
+  const uint32_t top = u32(m.positions.size());
+  m.positions.push_back({0.0, height, 0.0});
+  auto ring = [&](int r, int k) { return 1u + u32(static_cast<std::size_t>(r * segments + (k % segments))); };
+  auto innerAt = [&](int k) { return inner + u32(static_cast<std::size_t>(k % segments)); };
+  for (int k = 0; k < segments; ++k) {
+    m.triangles.push_back({0, innerAt(k), innerAt(k + 1)});
+    m.triangles.push_back({innerAt(k), ring(0, k), ring(0, k + 1)});
+    m.triangles.push_back({innerAt(k), ring(0, k + 1), innerAt(k + 1)});
+    for (int r = 0; r + 1 < rings; ++r) {
+      m.triangles.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
+      m.triangles.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
+    }
+    m.triangles.push_back({ring(rings - 1, k), top, ring(rings - 1, k + 1)});
+  }
+  orient(m);
   const Vec3 c = boundsOf(m.positions).center();
   for (Vec3& p : m.positions) p -= c;
   return m;

@@ -20,6 +20,15 @@ TriMesh makeOctahedronSphere(double radius, int n);   // 4 n^2 + 2 vertices, ver
 // the result is centred on its bounding box. rings x segments controls resolution.
 TriMesh makeJelly(double radius, double height, int ridges, int rings, int segments);
 
+// A jelly mould (issue 17): a tiered solid of revolution. From the flat base up: a wide lower
+// tier, a rounded shoulder stepping in, a narrower upper tier, and a domed crown. Both tiers are
+// fluted into `lobes` rounded lobes (radius R (1 - a + a sqrt|cos(lobes phi / 2)|): round
+// lobes, sharp creases between them), fading out over the crown. The base is flat: an inner
+// ring at half the base radius and a centre. `rings` rings along the profile (spaced by arc
+// length), `segments` vertices per ring: rings * segments + segments + 2 vertices, ring 0 the
+// base rim (vertices 1 .. segments). Centred on its bounding box.
+TriMesh makeMould(double radius, double height, int lobes, int rings, int segments);
+
 // A cloth: a flat rectangular sheet in the x-z plane (y = 0) centred at the origin, `width`
 // along x and `depth` along z, split into columns x rows quads. Vertex (i, j) (i = 0 .. columns
 // along x, j = 0 .. rows along z) is index i + (columns + 1) j. Each quad is cut into two

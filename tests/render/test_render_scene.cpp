@@ -2,6 +2,7 @@
 // overlay text, dynamic meshes and the mesh builders. Everything runs on OSMesa (llvmpipe).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -10,34 +11,17 @@
 #include "render/camera.h"
 #include "render/error.h"
 #include "render/image.h"
+#include "render/look.h"
 #include "render/mesh_builders.h"
 #include "render/renderer.h"
 #include "test_util.h"
 
 using namespace springy::render;
+using springy::render::test::dump;
 using springy::render::test::luminance;
 using springy::render::test::pixel;
 using springy::render::test::regionMean;
-
-namespace {
-
-RenderSettings small(int w = 64, int h = 48, bool aa = false) {
-  RenderSettings s;
-  s.width = w;
-  s.height = h;
-  s.antiAlias = aa;
-  s.shadowMapSize = 1024;
-  return s;
-}
-
-glm::vec3 to255(glm::vec3 c) { return c * 255.0f; }
-
-// Optional: SPRINGY_RENDER_DUMP=dir writes the test frames as PNGs for a human to look at.
-void dump(const Image& img, const std::string& name) {
-  if (const char* dir = std::getenv("SPRINGY_RENDER_DUMP")) writePng(std::string(dir) + "/" + name, img);
-}
-
-}  // namespace
+using springy::render::test::small;
 
 enum class Aa { None, Fxaa, Msaa };
 RenderSettings withAa(RenderSettings s, Aa aa) {
@@ -152,11 +136,21 @@ protected:
     const glm::vec3 d = glm::normalize(light.direction);
     return sphereCentre + d * (sphereCentre.y / -d.y);
   }
-  // Expected display value of lit ground: colour * (ambient + n.l)^(1/2.2), see the mesh shader.
+  // Expected display value of lit ground (see the mesh shader): in linear light,
+  // colour * (ambient from above + n.l), the ambient from above being 0.2 tinted by the default
+  // sky's top colour (luminance 1, mixed 35% into white: docs/look.md); then sRGB-encoded (no
+  // tone curve below 0.9).
   glm::vec3 expectedLitGround() const {
     const float ndl = glm::dot(glm::vec3(0, 1, 0), -glm::normalize(light.direction));
-    const float k = std::pow(0.2f * 1.0f + ndl, 1.0f / 2.2f);
-    return glm::min(to255(groundColour) * k, glm::vec3(255.0f));
+    const glm::vec3 sky = srgbToLinear({0.36f, 0.56f, 0.84f});
+    const glm::vec3 tint = glm::mix(glm::vec3(1.0f), sky / glm::dot(sky, glm::vec3(0.2126f, 0.7152f, 0.0722f)), 0.35f);
+    const glm::vec3 lit = srgbToLinear(groundColour) * (0.2f * tint + ndl);
+    glm::vec3 out;
+    for (int k = 0; k < 3; ++k) {
+      const float c = std::clamp(lit[k], 0.0f, 1.0f);
+      out[k] = 255.0f * (c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f);
+    }
+    return out;
   }
 };
 

@@ -1,8 +1,13 @@
 // Why: pixel access helpers shared by the render tests (images are RGBA8, rows top-down).
 #pragma once
 #include <cstdint>
+#include <cstdlib>
 #include <glm/glm.hpp>
+#include <string>
 #include <vector>
+
+#include "render/image.h"
+#include "render/renderer.h"
 
 namespace springy::render::test {
 
@@ -25,6 +30,21 @@ inline glm::vec3 regionMean(const std::vector<std::uint8_t>& rgba, int width, in
       ++n;
     }
   return n ? sum / static_cast<float>(n) : sum;
+}
+
+// Small frames for fast tests: w x h, anti-aliasing off unless asked, a 1024 shadow map.
+inline RenderSettings small(int w = 64, int h = 48, bool aa = false) {
+  RenderSettings s;
+  s.width = w;
+  s.height = h;
+  s.antiAlias = aa;
+  s.shadowMapSize = 1024;
+  return s;
+}
+
+// Optional: SPRINGY_RENDER_DUMP=dir writes the test frames as PNGs for a human to look at.
+inline void dump(const Image& img, const std::string& name) {
+  if (const char* dir = std::getenv("SPRINGY_RENDER_DUMP")) writePng(std::string(dir) + "/" + name, img);
 }
 
 inline float luminance(glm::vec3 c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }

@@ -154,13 +154,16 @@ void takeSnapshot(const World& world, FrameSnapshot& snapshot) {
   std::size_t n = 0;
   for (const BodyInfo& info : model.bodies) n += info.vertexCount;
   snapshot.positions.resize(3 * n);
+  snapshot.resting.resize(n);
   float* out = snapshot.positions.data();
+  uint8_t* resting = snapshot.resting.data();
   for (const BodyInfo& info : model.bodies) {
     for (uint32_t i = 0; i < info.vertexCount; ++i) {
       const Vec3& p = x[info.firstVertex + i];
       *out++ = static_cast<float>(p.x);
       *out++ = static_cast<float>(p.y);
       *out++ = static_cast<float>(p.z);
+      *resting++ = world.restsOnCollider(info.firstVertex + i) ? 1 : 0;
     }
   }
 }
@@ -171,7 +174,12 @@ void SceneView::draw(const FrameSnapshot& snapshot) {
     const std::size_t n = 3 * static_cast<std::size_t>(bodyVertexCounts_[b]);
     const std::span<const float> body = std::span<const float>(snapshot.positions).subspan(offset, n);
     if (drawBindings_[b].empty()) {
-      renderer_.updateDynamicMesh(bodyMeshes_[b], body);
+      // A vertex resting on a collider keeps the drawn surface flat there: a smooth patch would
+      // bulge through a thin wall that the flat mesh lies on.
+      const std::span<const uint8_t> flat =
+          snapshot.resting.empty() ? std::span<const uint8_t>()
+                                   : std::span<const uint8_t>(snapshot.resting).subspan(offset / 3, n / 3);
+      renderer_.updateDynamicMesh(bodyMeshes_[b], body, flat);
     } else {
       placed_.resize(3 * drawBindings_[b].size());
       placeEmbedded(drawBindings_[b], body.data(), placed_.data());

@@ -18,6 +18,7 @@ struct FrameSnapshot {
   double time = 0.0;
   double dt = 0.0;
   std::vector<float> positions;  // x, y, z per vertex of every body, bodies in model order
+  std::vector<uint8_t> resting;  // per vertex, the same order: 1 if it rests on a static collider
 };
 void takeSnapshot(const World& world, FrameSnapshot& snapshot);
 

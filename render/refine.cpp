@@ -70,15 +70,27 @@ PnRefinement::PnRefinement(std::span<const std::uint32_t> triangles, std::size_t
 }
 
 void PnRefinement::evaluate(std::span<const glm::vec3> P, std::span<const glm::vec3> N,
-                            std::vector<glm::vec3>& out) const {
+                            std::vector<glm::vec3>& out, std::span<const std::uint8_t> flat) const {
   out.resize(vertexCount_);
   std::copy(P.begin(), P.begin() + static_cast<std::ptrdiff_t>(coarseVertices_), out.begin());
   const int n = level_;
   const float inv = 1.0f / static_cast<float>(n);
   // The control point next to corner a on edge a-b (Vlachos et al. 2001, eq. for b210):
-  // (2 Pa + Pb - ((Pb - Pa) . Na) Na) / 3.
+  // (2 Pa + Pb - ((Pb - Pa) . Na) Na) / 3; on the chord, (2 Pa + Pb) / 3, at a flat vertex. An
+  // edge's curve still depends on its two vertices alone: no cracks either way. Every corner of a
+  // triangle at a flat vertex is made flat too: a free neighbour's patch would bulge toward the
+  // wall the flat vertex rests on (seen: ball colours dotting the outside of the stack's tray).
+  std::vector<std::uint8_t> flatter;
+  if (!flat.empty()) {
+    flatter.assign(flat.begin(), flat.end());
+    for (std::size_t t = 0; t + 2 < coarse_.size(); t += 3) {
+      const std::uint32_t a = coarse_[t], b = coarse_[t + 1], c = coarse_[t + 2];
+      if (flat[a] != 0 || flat[b] != 0 || flat[c] != 0) flatter[a] = flatter[b] = flatter[c] = 1;
+    }
+  }
   auto tangent = [&](std::uint32_t a, std::uint32_t b) {
-    return (2.0f * P[a] + P[b] - glm::dot(P[b] - P[a], N[a]) * N[a]) * (1.0f / 3.0f);
+    const float bend = flatter.empty() || flatter[a] == 0 ? glm::dot(P[b] - P[a], N[a]) : 0.0f;
+    return (2.0f * P[a] + P[b] - bend * N[a]) * (1.0f / 3.0f);
   };
   std::size_t o = coarseVertices_;
   for (const auto& [a, b] : edges_) {

@@ -25,9 +25,12 @@ class PnRefinement {
   std::size_t vertexCount() const { return vertexCount_; }
   const std::vector<std::uint32_t>& triangles() const { return triangles_; }
   // positions / normals of the coarse mesh (3 floats per vertex, unit normals); out gets
-  // 3 * vertexCount() floats: the refined positions.
+  // 3 * vertexCount() floats: the refined positions. `flat` (empty, or one per coarse vertex):
+  // nonzero keeps the surface flat at that vertex and its neighbours (their edges' control points
+  // on the chords), for a vertex resting on a collider: a patch bulging there would cross a thin
+  // wall it lies on.
   void evaluate(std::span<const glm::vec3> positions, std::span<const glm::vec3> normals,
-                std::vector<glm::vec3>& out) const;
+                std::vector<glm::vec3>& out, std::span<const std::uint8_t> flat = {}) const;
 
   // Only coarse meshes are refined (a fine one shows no facets on its outline and would cost
   // for nothing): the level for a mesh of `triangles` triangles puts it at about

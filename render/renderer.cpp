@@ -215,7 +215,7 @@ struct Renderer::Impl {
 
   // Area-weighted smooth normals, interleaved with positions, uploaded to the VBO. A refined
   // mesh: the coarse normals shape the PN patches, the refined surface gets its own normals.
-  void setPositions(GpuMesh& m, std::span<const float> pos) {
+  void setPositions(GpuMesh& m, std::span<const float> pos, std::span<const std::uint8_t> flat = {}) {
     if (pos.size() != m.vertexCount * 3)
       throw RenderError("Renderer: got " + std::to_string(pos.size()) + " position floats for " +
                         std::to_string(m.vertexCount) + " vertices");
@@ -225,7 +225,7 @@ struct Renderer::Impl {
     const std::vector<glm::vec3>* drawnPos = &m.coarsePos;
     const std::vector<glm::vec3>* drawnNormals = &m.coarseNormals;
     if (m.refinement.active()) {
-      m.refinement.evaluate(m.coarsePos, m.coarseNormals, m.refinedPos);
+      m.refinement.evaluate(m.coarsePos, m.coarseNormals, m.refinedPos, flat);
       smoothNormals(m.refinedPos, m.refinement.triangles(), m.coarseNormals);  // reused as scratch
       drawnPos = &m.refinedPos;
     }
@@ -694,12 +694,15 @@ MeshId Renderer::addDynamicMesh(std::size_t vertexCount, std::span<const std::ui
   return impl_->createMesh(vertexCount, triangles, material, true);
 }
 
-void Renderer::updateDynamicMesh(MeshId id, std::span<const float> positions) {
+void Renderer::updateDynamicMesh(MeshId id, std::span<const float> positions, std::span<const std::uint8_t> flat) {
   impl_->ctx.makeCurrent();
   GpuMesh& m = impl_->mesh(id);
   if (!m.dynamic) throw RenderError("Renderer: mesh " + std::to_string(id) + " is not dynamic");
   const auto t0 = Clock::now();
-  impl_->setPositions(m, positions);
+  if (!flat.empty() && flat.size() != m.vertexCount)
+    throw RenderError("Renderer: got " + std::to_string(flat.size()) + " flat flags for " +
+                      std::to_string(m.vertexCount) + " vertices");
+  impl_->setPositions(m, positions, flat);
   if (impl_->settings.profilePasses) {
     glFinish();
     impl_->timings.passMs[static_cast<std::size_t>(RenderPass::Upload)] += msSince(t0);

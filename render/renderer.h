@@ -112,8 +112,10 @@ public:
   // A soft body: topology and material once; positions each frame with updateDynamicMesh.
   MeshId addDynamicMesh(std::size_t vertexCount, std::span<const std::uint32_t> triangles,
                         const Material& material);
-  // positions: x, y, z per vertex (3 * vertexCount floats).
-  void updateDynamicMesh(MeshId id, std::span<const float> positions);
+  // positions: x, y, z per vertex (3 * vertexCount floats). `flat` (empty, or one per vertex):
+  // nonzero where a smooth (refined) surface must stay flat, e.g. a vertex resting on a thin
+  // collider wall, which a bulging patch would poke through.
+  void updateDynamicMesh(MeshId id, std::span<const float> positions, std::span<const std::uint8_t> flat = {});
   // A collider or prop that never moves (see makeBox / makeCylinder / makeSphere).
   MeshId addStaticMesh(std::span<const float> positions, std::span<const std::uint32_t> triangles,
                        const Material& material);

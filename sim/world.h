@@ -91,6 +91,9 @@ class World {
   double dt() const { return dt_; }
   double time() const { return time_; }
   uint64_t stepCount() const { return steps_; }
+  // Whether vertex i is resting on a static collider: it touched one within the colliders'
+  // resting window (Colliders::restingWindow). For drawing (a smooth surface stays flat there).
+  bool restsOnCollider(std::size_t i) const { return !sinceContact_.empty() && sinceContact_[i] <= restingSteps_; }
   const std::vector<Vec3>& positions() const { return x_; }
   const std::vector<Vec3>& velocities() const { return v_; }
   const std::vector<ForceStage>& forceStages() const { return forces_->stages(); }

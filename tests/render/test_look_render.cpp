@@ -224,3 +224,30 @@ TEST(Look, PnTrianglesRoundACoarseMeshWithoutCracks) {
     }
   }
 }
+
+// A vertex resting on a collider keeps the drawn surface flat (updateDynamicMesh's `flat`): with
+// every vertex flat, the refined octahedron is the flat one subdivided, each refined vertex on
+// its coarse face's plane (none bulges out, through a wall a face lies on); with one vertex flat,
+// the refined points near it move in (never further out than the round surface's).
+TEST(Look, PnTrianglesStayFlatAtRestingVertices) {
+  const std::vector<glm::vec3> p = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const std::vector<std::uint32_t> tris = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  const PnRefinement pn(tris, p.size(), 3);
+  std::vector<glm::vec3> out;
+  pn.evaluate(p, p, out, std::vector<std::uint8_t>(p.size(), 1));
+  // The octahedron's faces are the planes |x| + |y| + |z| = 1 of their octants.
+  for (const glm::vec3& q : out) EXPECT_NEAR(std::fabs(q.x) + std::fabs(q.y) + std::fabs(q.z), 1.0f, 1e-6f);
+  // Only vertex 0 (+x) flat.
+  std::vector<std::uint8_t> flat(p.size(), 0);
+  flat[0] = 1;
+  std::vector<glm::vec3> round, one;
+  pn.evaluate(p, p, round);
+  pn.evaluate(p, p, one, flat);
+  int onChord = 0;
+  for (std::size_t i = p.size(); i < one.size(); ++i) {
+    if (one[i] == round[i]) continue;  // away from vertex 0
+    EXPECT_LT(glm::length(one[i]), glm::length(round[i]) + 1e-6f) << i;  // flatter, never further out
+    ++onChord;
+  }
+  EXPECT_GT(onChord, 0);
+}

@@ -8,6 +8,7 @@ packages=(
   libassimp-dev          # mesh import (OBJ, PLY, STL, glTF)
   libtomlplusplus-dev    # scene files
   libcli11-dev           # command line
+  nlohmann-json3-dev     # sweeps: manifests, results, check --json
   libmeshoptimizer-dev   # mesh simplification
   libcgal-dev            # simulation proxies: alpha wrapping + remeshing (header-only, GPL-3+)
   libosmesa6-dev         # offscreen OpenGL (Mesa llvmpipe)

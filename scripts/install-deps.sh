@@ -21,6 +21,9 @@ packages=(
   libbenchmark-dev       # benchmarks
   libbullet-dev          # benchmarks: the peer comparison (Bullet soft bodies, bench/bullet)
   gnuplot-nox            # plots in the accuracy study
+  munge slurmctld slurmd slurm-client  # sweeps: the Slurm test's single-node cluster (scripts/slurm-local.sh)
+  parallel               # sweeps: the README's GNU parallel example, tested
+  python3                # tests: a JUnit consumer (tests/junit_check.py, xml.etree)
   clang libclang-rt-14-dev llvm  # fuzzing (scripts/fuzz.sh): clang 14, libFuzzer and sanitizer runtimes, llvm-symbolizer
 )
 SUDO=""

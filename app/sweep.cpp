@@ -517,8 +517,9 @@ int runLocally(const std::vector<SweepTask>& tasks, unsigned jobs) {
     std::string line = head + describe(*r.task) + ": ";
     if (result) {
       line += (*result)["status"].get<std::string>();
+      // The message's first sentence (the table has all of it).
       const std::string message = (*result)["message"].get<std::string>();
-      if (!message.empty()) line += " (" + message + ")";
+      if (!message.empty()) line += " (" + message.substr(0, message.find(". ")) + ")";
     } else {
       ++failedToRun;
       line += WIFSIGNALED(status) ? "run-task killed by signal " + std::to_string(WTERMSIG(status))

@@ -28,6 +28,7 @@ trap 'exit 143' TERM
 
 fail() { echo "slurm_sweep: FAILED: $*" >&2; exit 1; }
 
+unset SLURM_CONF
 eval "$(bash "$source_dir/scripts/slurm-local.sh" start "$cluster")"
 [ -n "${SLURM_CONF:-}" ] || fail "the cluster did not start"
 

@@ -137,7 +137,9 @@ CommandLine::CommandLine() {
   sweepCmd->add_option("spec", sweep.spec, "Sweep spec (.toml)")->required()->check(CLI::ExistingFile);
   sweepCmd->add_option("-o,--output", sweep.output,
                        "Directory of the manifest, results and table (default: SPEC's name + .sweep, here)");
-  sweepCmd->add_option("-j,--jobs", sweep.jobs, "Tasks at once on this machine (default: one per core)")
+  sweepCmd
+      ->add_option("-j,--jobs", sweep.jobs,
+                   "At most this many tasks at once (default: one per core; never more threads than cores in all)")
       ->check(CLI::Range(1u, 4096u));
   sweepCmd->add_flag("--manifest-only", sweep.manifestOnly,
                      "Write the manifest and stop (run its tasks with run-task: GNU parallel, a scheduler)");

@@ -326,14 +326,16 @@ std::vector<PlannedTask> planTasks(const Spec& spec, const std::vector<std::stri
   return tasks;
 }
 
-// The point's key that an error message names (the option, or the scene key), or null.
+// The point's key that an error message names, or null: the scene key the scene reader refused
+// ("key 'drag'"), else the option ("--dt", "--set body.3.mass=1: ...").
 const SpecValue* named(const std::vector<SpecValue>& values, const std::string& message) {
   for (const SpecValue& v : values) {
-    const std::string leaf = v.key.substr(v.key.rfind('.') + 1);
-    const bool found = isSetting(v.key) ? message.find("--" + v.key) != std::string::npos
-                                        : message.find("--set " + v.key + "=") != std::string::npos ||
-                                              message.find("key '" + leaf + "'") != std::string::npos;
-    if (found) return &v;
+    if (!isSetting(v.key) && message.find("key '" + v.key.substr(v.key.rfind('.') + 1) + "'") != std::string::npos) {
+      return &v;
+    }
+  }
+  for (const SpecValue& v : values) {
+    if (message.find(isSetting(v.key) ? "--" + v.key : "--set " + v.key + "=") != std::string::npos) return &v;
   }
   return nullptr;
 }

@@ -151,6 +151,8 @@ TEST_F(SweepTest, BadSpecsNameFileLineAndKey) {
   const std::vector<Case> cases = {
       {scenes + "[grid]\ndt = [0.002, -1]\n", "bad.toml:3:14: key 'dt' = -1"},
       {scenes + "[grid]\nenvironment.drag = [0.1, -2]\n", "bad.toml:3:26: key 'environment.drag' = -2"},
+      {scenes + "[set]\nbody.mass = 2.0\n[grid]\nenvironment.drag = [-2]\n",
+       "bad.toml:5:21: key 'environment.drag' = -2"},
       {scenes + "[grid]\nenvironment.dragg = [0.1]\n", "bad.toml:3:22: key 'environment.dragg' = 0.1"},
       {scenes + "[set]\nbody.3.mass = 1.0\n", "bad.toml:3:15: key 'body.3.mass' = 1.0"},
       {scenes + "colour = 1\n", "bad.toml:2:10: unknown key 'colour'"},

@@ -4,6 +4,8 @@
 # split between them) against the same 16 tasks one after another, each on one thread
 # (`springy run-task --threads 1`). Rounds alternate the two; prints each time and the medians.
 # usage: scripts/bench-sweep.sh [ROUNDS]   (default 5; the build in $SPRINGY_BUILD_DIR or build/)
+# SPRINGY_BENCH_QUIET=1: start each round only when no other process is running (on a shared
+# machine: waits up to 10 minutes a round, then runs anyway).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 springy=$PWD/${SPRINGY_BUILD_DIR:-build}/app/springy
@@ -21,7 +23,18 @@ environment.drag = [0.1, 0.15, 0.2, 0.25]
 EOF2
 now() { date +%s.%N; }
 seq_times=() local_times=()
+# True when nothing else has been running for the last 3 s (/proc/loadavg's running count is ours).
+quiet() {
+  local i
+  for i in 1 2 3 4 5 6; do
+    [ "$(cut -d' ' -f4 /proc/loadavg | cut -d/ -f1)" -le 1 ] || return 1
+    sleep 0.5
+  done
+}
 for r in $(seq "$rounds"); do
+  if [ "${SPRINGY_BENCH_QUIET:-0}" = 1 ]; then
+    for i in $(seq 600); do quiet && break; sleep 1; done
+  fi
   rm -rf "$work/seq" "$work/local"
   "$springy" sweep "$work/bench.toml" -o "$work/seq" --manifest-only >/dev/null
   t0=$(now)

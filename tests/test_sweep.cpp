@@ -201,9 +201,9 @@ int resultCount(const fs::path& dir) {
 }
 
 TEST_F(SweepTest, KilledSweepResumesWithOnlyItsUnfinishedTasks) {
-  // Eight tasks of about a fifth of a second each, one at a time.
+  // Eight tasks of about a tenth of a second each, one at a time.
   const fs::path spec = dir_ / "resume.toml";
-  writeFile(spec, "scenes = [\"" + kSphere + "\"]\n[set]\nduration = 3.0\n[grid]\ndt = [0.002, 0.004]\n" +
+  writeFile(spec, "scenes = [\"" + kSphere + "\"]\n[set]\nduration = 2.0\n[grid]\ndt = [0.002, 0.004]\n" +
                       "environment.drag = [0.1, 0.2, 0.3, 0.4]\n");
   const fs::path out = dir_ / "resume";
   const pid_t pid = startSpringy({"sweep", spec.string(), "-o", out.string(), "--jobs", "1"}, dir_ / "first.log");

@@ -218,4 +218,10 @@ void AtomicFile::commit() {
   }
 }
 
+void writeFileAtomically(const std::string& path, std::string_view text, const std::vector<std::string>& inputs) {
+  AtomicFile file(path, inputs);
+  file.write(text);
+  file.commit();
+}
+
 }  // namespace springy

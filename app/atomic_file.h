@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace springy {
@@ -39,6 +40,7 @@ class AtomicFile {
   // Appends to the temporary file. Throws springy::Error naming the target when a write fails
   // (ENOSPC: a full disk, EFBIG: over the file size limit, EIO).
   void write(std::span<const std::uint8_t> bytes);
+  void write(std::string_view text) { write({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}); }
   // Verifies the temporary file (fsync, close, size > 0, and all that write() wrote), then
   // renames it over the target. Throws springy::Error naming the target on any failure, and
   // the temporary file is removed.
@@ -54,6 +56,9 @@ class AtomicFile {
   bool usedWrite_ = false;
   bool committed_ = false;
 };
+
+// Writes `text` to `path` through an AtomicFile (complete or not at all). Throws springy::Error.
+void writeFileAtomically(const std::string& path, std::string_view text, const std::vector<std::string>& inputs = {});
 
 // "REASON" for an errno value (strerror), for messages.
 std::string errorText(int error);

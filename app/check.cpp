@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -46,16 +47,31 @@ int runCheck(const CheckOptions& options) {
     trace.open(traceFile->temporaryPath());
     writeTraceHeader(trace);
   }
+  // Checked before any run: an unwritable --json or --junit fails at once, and no scene is replaced.
+  std::unique_ptr<AtomicFile> jsonFile, junitFile;
+  if (!options.json.empty()) jsonFile = std::make_unique<AtomicFile>(options.json, options.scenes);
+  if (!options.junit.empty()) junitFile = std::make_unique<AtomicFile>(options.junit, options.scenes);
+  std::vector<SceneRecord> records;
   int failures = 0;
   for (const std::string& path : options.scenes) {
+    SceneRecord& record = records.emplace_back();
+    record.path = path;
+    record.scene = std::filesystem::path(path).stem().string();
     SceneDesc scene;
     try {
       scene = loadSceneWith(path, options.overrides);
     } catch (const Error& e) {
       std::cerr << "springy check: " << e.what() << "\n";
+      record.status = SceneRecord::Status::Error;
+      record.message = e.what();
       ++failures;
       continue;
     }
+    record.scene = scene.name;
+    record.integrator = std::string(integratorName(scene.integrator));
+    record.dt = scene.dt;
+    record.substeps = scene.substeps;
+    record.duration = scene.duration;
     const auto wallStart = std::chrono::steady_clock::now();
     World world = makeWorld(scene, options.overrides);
     MonitorLimits limits;
@@ -95,6 +111,7 @@ int runCheck(const CheckOptions& options) {
     }
     progress.finish();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
+    record.wall = wall;
     std::printf("  %-16s %9s %8s %8s %10s %10s %9s %10s %10s %10s %10s %s\n", "body", "steps", "sim[s]", "wall[s]",
                 "max strain", "max pen[m]", "vol min", "vol end", "kinetic", "grav", "elastic", "rest");
     for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
@@ -110,6 +127,20 @@ int runCheck(const CheckOptions& options) {
                   static_cast<unsigned long long>(world.stepCount()), world.time(), wall, r.maxStrain, r.maxPenetration,
                   volumeMin, volumeEnd, r.last.kinetic, r.last.gravitational, r.last.elastic,
                   rest.atRest(info) ? "yes" : "no");
+      BodyResult& result = record.bodies.emplace_back();
+      result.name = info.name;
+      result.steps = world.stepCount();
+      result.time = world.time();
+      result.maxStrain = r.maxStrain;
+      result.maxPenetration = r.maxPenetration;
+      if (info.restVolume > 0.0) {
+        result.volumeMin = r.minVolumeRatio;
+        result.volumeEnd = r.last.volume / info.restVolume;
+      }
+      result.kinetic = r.last.kinetic;
+      result.gravitational = r.last.gravitational;
+      result.elastic = r.last.elastic;
+      result.atRest = rest.atRest(info);
       if (monitor.energyChecked()) {
         std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
                     r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
@@ -169,6 +200,9 @@ int runCheck(const CheckOptions& options) {
     if (failure) {
       std::printf("  FAILED: %s\n", failure->message.c_str());
       std::cerr << "springy check: " << path << ": " << failure->message << "\n";
+      record.status = SceneRecord::Status::Failed;
+      record.failedBody = failure->body;
+      record.message = failure->message;
       ++failures;
     } else {
       std::printf("  ok\n");
@@ -179,6 +213,15 @@ int runCheck(const CheckOptions& options) {
     if (!trace) throw Error(options.trace + ": writing the trace failed: " + errorText(errno));
     traceFile->commit();
   }
+  if (jsonFile) {
+    jsonFile->write(recordsJson(records));
+    jsonFile->commit();
+  }
+  if (junitFile) {
+    junitFile->write(junitXml(records));
+    junitFile->commit();
+  }
+  if (options.records) *options.records = std::move(records);
   return failures == 0 ? 0 : 1;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "app/records.h"
 #include "app/runner.h"
 
 namespace springy {
@@ -17,6 +18,9 @@ struct CheckOptions {
   double minVolume = 0.0;  // fail when a body's volume falls below this fraction of rest
   double endVolume = 0.0;  // fail when a body ends below this fraction of its rest volume
   bool endAtRest = false;  // fail unless every body is at rest (sim/monitor.h) through the last second
+  std::string json;        // --json FILE: the records (app/records.h), empty for none
+  std::string junit;       // --junit FILE: the records as JUnit XML, empty for none
+  std::vector<SceneRecord>* records = nullptr;  // when set, also receives the records (sweep's run-task)
 };
 int runCheck(const CheckOptions& options);
 
@@ -69,5 +73,30 @@ struct StudyOptions {
   int repeats = 3;
 };
 int runStudy(const StudyOptions& options);
+
+// `springy sweep SPEC.toml` (app/sweep.cpp, docs/sweeps.md).
+struct SweepOptions {
+  std::string spec;
+  std::string output;         // directory; empty: SPEC's stem + ".sweep" in the working directory
+  unsigned jobs = 0;          // tasks at once (0: one per core)
+  bool manifestOnly = false;  // write the manifest, run nothing
+  bool slurm = false;         // submit a job array and a gather job
+  unsigned cpusPerTask = 1;   // Slurm --cpus-per-task
+  unsigned maxRunning = 0;    // Slurm --array=0-N%K (0: no limit)
+  std::vector<std::string> sbatchArgs;
+};
+int runSweep(const SweepOptions& options);
+
+struct RunTaskOptions {
+  std::string manifest;
+  std::optional<long> index;
+  std::optional<unsigned> threads;
+};
+int runTask(const RunTaskOptions& options);
+
+struct GatherOptions {
+  std::string manifest;
+};
+int runGather(const GatherOptions& options);
 
 }  // namespace springy

@@ -1,7 +1,10 @@
 #include "app/runner.h"
 
+#include <toml++/toml.h>
 #include <cmath>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "app/atomic_file.h"
 #include "app/commands.h"
@@ -11,10 +14,107 @@
 
 namespace springy {
 
+namespace {
+
+// Sets `value` at parts[i..] below `node` (applySceneSettings). `setting` names it in errors.
+void setKey(toml::node& node, const std::vector<std::string>& parts, std::size_t i, const toml::node& value,
+            const std::string& setting) {
+  const std::string& part = parts[i];
+  if (toml::array* array = node.as_array()) {
+    if (!array->is_array_of_tables() || array->empty()) {
+      throw Error("--set " + setting + ": '" + parts[i - 1] + "' is not an array of tables ([[" + parts[i - 1] + "]])");
+    }
+    const bool index = !part.empty() && part.find_first_not_of("0123456789") == std::string::npos;
+    if (!index) {  // every table of the array
+      for (toml::node& each : *array) setKey(each, parts, i, value, setting);
+      return;
+    }
+    const std::size_t k = part.size() > 6 ? array->size() : std::stoul(part);
+    if (k >= array->size()) {
+      throw Error("--set " + setting + ": the scene has " + std::to_string(array->size()) + " [[" + parts[i - 1] +
+                  "]] (indices from 0)");
+    }
+    if (i + 1 == parts.size()) throw Error("--set " + setting + ": names a whole table, not a key");
+    setKey(*array->get(k), parts, i + 1, value, setting);
+    return;
+  }
+  toml::table* table = node.as_table();
+  if (!table) throw Error("--set " + setting + ": '" + parts[i - 1] + "' is a value, not a table");
+  if (i + 1 == parts.size()) {
+    value.visit([&](const auto& v) { table->insert_or_assign(part, v); });
+    return;
+  }
+  if (!table->contains(part)) table->insert(part, toml::table{});
+  setKey(*table->get(part), parts, i + 1, value, setting);
+}
+
+void applySetting(toml::table& root, const std::string& setting) {
+  const std::size_t equals = setting.find('=');
+  if (equals == std::string::npos) throw Error("--set " + setting + ": expected KEY=VALUE");
+  std::vector<std::string> parts;
+  for (std::size_t start = 0;;) {
+    const std::size_t dot = std::min(setting.find('.', start), equals);
+    parts.push_back(setting.substr(start, dot - start));
+    if (parts.back().empty()) throw Error("--set " + setting + ": an empty key in '" + setting.substr(0, equals) + "'");
+    if (dot == equals) break;
+    start = dot + 1;
+  }
+  toml::table parsed;
+  try {
+    parsed = toml::parse("value = " + setting.substr(equals + 1));
+  } catch (const toml::parse_error&) {
+    throw Error("--set " + setting +
+                ": the value is not a TOML value (a number, a \"string\", true or false, an [array])");
+  }
+  setKey(root, parts, 0, *parsed.get("value"), setting);
+}
+
+// The scene error `message` without its "PATH:LINE:COLUMN: " prefix.
+std::string withoutLocation(const std::string& message, const std::string& path) {
+  if (message.rfind(path + ":", 0) != 0) return message;
+  std::size_t at = path.size() + 1;
+  for (int field = 0; field < 2; ++field) {  // line, column
+    const std::size_t colon = message.find(':', at);
+    if (colon == std::string::npos || message.find_first_not_of("0123456789", at) != colon) return message;
+    at = colon + 1;
+  }
+  return message.substr(message[at] == ' ' ? at + 1 : at);
+}
+
+}  // namespace
+
+SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::string>& sets) {
+  if (sets.empty()) return loadScene(path);
+  checkInputFile(path, kMaxSceneFileBytes, "scene file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open the scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  toml::table root;
+  try {
+    root = toml::parse(text.str(), path);
+  } catch (const toml::parse_error&) {
+    return parseScene(text.str(), path);  // throws the scene's own error, with its line
+  }
+  for (const std::string& setting : sets) applySetting(root, setting);
+  std::ostringstream changed;  // floats are written with every digit: the same numbers read back
+  changed << toml::toml_formatter(root);
+  try {
+    return parseScene(changed.str(), path);
+  } catch (const Error& e) {
+    parseScene(text.str(), path);  // an error in the file itself is reported at its own line
+    std::string all;
+    for (const std::string& setting : sets) all += (all.empty() ? "" : ", ") + setting;
+    throw Error(path + ": with --set " + all + ": " + withoutLocation(e.what(), path));
+  }
+}
+
 SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise) {
-  SceneDesc scene = loadScene(path);
+  SceneDesc scene = loadSceneSetting(path, overrides.sets);
   for (const BodyDesc& b : scene.bodies) {
-    if (!b.note.empty()) std::cerr << "springy: " << b.source << ": body '" << b.name << "': " << b.note << "\n";
+    if (advise && !b.note.empty()) {
+      std::cerr << "springy: " << b.source << ": body '" << b.name << "': " << b.note << "\n";
+    }
   }
   if (overrides.integrator && !parseIntegrator(*overrides.integrator, scene.integrator)) {
     throw Error("--integrator: '" + *overrides.integrator + "' is not one of: " + integratorNames());

@@ -5,6 +5,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "scene/scene.h"
 #include "sim/monitor.h"
@@ -17,10 +18,21 @@ struct RunOverrides {
   std::optional<int> substeps;
   bool autoSubsteps = false;  // --substeps auto: the stability advisor picks them
   std::optional<unsigned> threads;  // --threads (default: SPRINGY_THREADS, else every core)
+  // --set KEY=VALUE: scene keys set before the scene is read (applySceneSettings).
+  std::vector<std::string> sets;
 };
 
+// Sets scene keys in a scene file's TOML text before it is read, as `--set KEY=VALUE` does: KEY
+// is a dotted path of tables ("environment.drag", "scene.duration"), where an array of tables
+// takes an index ("body.0.mass": the first [[body]]) or stands for each of its tables
+// ("body.mass": every body); VALUE is a TOML value (0.5, "rk4", true, [0, 2, 0]). Missing tables
+// are created. Returns the scene; throws springy::Error naming the file and the setting (an
+// error of the scene file itself keeps its own line).
+SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::string>& sets);
+
 // Loads a scene and applies the overrides. Throws springy::Error. advise: run the stability
-// advisor (warn on stderr when the step exceeds its estimate; pick --substeps auto).
+// advisor (warn on stderr when the step exceeds its estimate; pick --substeps auto) and print the
+// bodies' notes; without it nothing is printed (a sweep validating its points).
 SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise = true);
 
 // The scene's world, stepping on the requested threads (World::setThreads: small models stay

@@ -66,15 +66,7 @@ std::string fmt(const char* f, double v) {
 }
 
 // Writes text to path atomically.
-void writeFile(const fs::path& path, const std::string& text) {
-  AtomicFile file(path.string());
-  {
-    std::ofstream out(file.temporaryPath());
-    out << text;
-    if (!out) throw Error(path.string() + ": writing failed");
-  }
-  file.commit();
-}
+void writeFile(const fs::path& path, const std::string& text) { writeFileAtomically(path.string(), text); }
 
 // ---------------------------------------------------------------------------------------------
 // Accuracy.

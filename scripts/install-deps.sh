@@ -8,6 +8,7 @@ packages=(
   libassimp-dev          # mesh import (OBJ, PLY, STL, glTF)
   libtomlplusplus-dev    # scene files
   libcli11-dev           # command line
+  nlohmann-json3-dev     # sweeps: manifests, results, check --json
   libmeshoptimizer-dev   # mesh simplification
   libcgal-dev            # simulation proxies: alpha wrapping + remeshing (header-only, GPL-3+)
   libosmesa6-dev         # offscreen OpenGL (Mesa llvmpipe)
@@ -20,6 +21,9 @@ packages=(
   libbenchmark-dev       # benchmarks
   libbullet-dev          # benchmarks: the peer comparison (Bullet soft bodies, bench/bullet)
   gnuplot-nox            # plots in the accuracy study
+  munge slurmctld slurmd slurm-client  # sweeps: the Slurm test's single-node cluster (scripts/slurm-local.sh)
+  parallel               # sweeps: the README's GNU parallel example, tested
+  python3                # tests: a JUnit consumer (tests/junit_check.py, xml.etree)
   clang libclang-rt-14-dev llvm  # fuzzing (scripts/fuzz.sh): clang 14, libFuzzer and sanitizer runtimes, llvm-symbolizer
 )
 SUDO=""

@@ -1,0 +1,194 @@
+#include "app/cli.h"
+
+#include <algorithm>
+
+#include "sim/limits.h"
+
+namespace springy {
+namespace {
+
+// A fraction in [0, 1]; CLI::Range lets NaN through (every comparison with it is false).
+const CLI::Validator kFraction(
+    [](const std::string& text) -> std::string {
+      double value = 0.0;
+      try {
+        std::size_t used = 0;
+        value = std::stod(text, &used);
+        if (used != text.size()) return "expected a number in [0, 1], got '" + text + "'";
+      } catch (const std::exception&) {
+        return "expected a number in [0, 1], got '" + text + "'";
+      }
+      return value >= 0.0 && value <= 1.0 ? std::string() : "expected a number in [0, 1], got '" + text + "'";
+    },
+    "FRACTION in [0, 1]");
+
+void addRunOverrides(CLI::App* cmd, RunOverrides& o) {
+  cmd->add_option("--integrator", o.integrator, "Override the scene's integrator: " + integratorNames());
+  cmd->add_option("--dt", o.dt, "Override the scene's time step [s]");
+  cmd->add_option_function<std::string>(
+      "--substeps",
+      [&o](const std::string& text) {
+        if (text == "auto") {
+          o.autoSubsteps = true;
+          return;
+        }
+        std::size_t used = 0;
+        int n = 0;
+        try {
+          n = std::stoi(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != text.size() || n < 1 || n > kMaxSubsteps) {
+          throw CLI::ValidationError("--substeps", "expected a whole number from 1 to " + std::to_string(kMaxSubsteps) +
+                                                       " or 'auto', got '" + text + "'");
+        }
+        o.substeps = n;
+      },
+      "Steps of dt/N per dt, or 'auto': the stability advisor's safe number");
+  cmd->add_option("--duration", o.duration, "Override the simulated duration [s]");
+  cmd->add_option("--threads", o.threads,
+                  "Simulation threads (default: $SPRINGY_THREADS, else all cores; models under " +
+                      std::to_string(World::kMinVerticesPerThread) +
+                      " vertices per thread use fewer). Results are identical for every count.")
+      ->check(CLI::Range(1u, 256u));
+  cmd->add_option("--set", o.sets,
+                  "Set a scene key before the scene is read, KEY=VALUE (repeatable): KEY a dotted path "
+                  "(environment.drag, scene.duration, body.mass for every body, body.0.mass for the first), "
+                  "VALUE a TOML value (0.5, \"rk4\", true, [0, 2, 0])")
+      ->allow_extra_args(false);
+}
+
+#ifdef SPRINGY_HAVE_RENDER
+void addRenderOverrides(CLI::App* cmd, RenderOverrides& o) {
+  cmd->add_option("--width", o.width, "Frame width in pixels (even)");
+  cmd->add_option("--height", o.height, "Frame height in pixels (even)");
+  cmd->add_option("--fps", o.fps, "Frames per second");
+  cmd->add_flag("--no-overlay", o.noOverlay, "No text overlay");
+  cmd->add_flag("--no-shadows", o.noShadows, "No shadow pass");
+  cmd->add_flag("--no-antialias", o.noAntialias, "No multisampling");
+}
+#endif
+
+}  // namespace
+
+CommandLine::CommandLine() {
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "springy 0.1");
+
+  checkCmd = app.add_subcommand("check", "Run scenes headlessly and check stability; per-body report");
+  checkCmd->add_option("scenes", check.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  addRunOverrides(checkCmd, check.overrides);
+  checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV");
+  checkCmd->add_option("--min-volume", check.minVolume, "Fail if a body's volume falls below this fraction of rest")
+      ->check(kFraction);
+  checkCmd->add_option("--end-volume", check.endVolume, "Fail if a body ends below this fraction of its rest volume")
+      ->check(kFraction);
+  checkCmd->add_flag("--end-at-rest", check.endAtRest,
+                     "Fail unless every body is at rest: over the last second no vertex moves more than 0.2% of "
+                     "its body's size");
+  checkCmd->add_option("--json", check.json, "Write the per-body results as JSON (the records `sweep` gathers)");
+  checkCmd->add_option("--junit", check.junit,
+                       "Write the results as JUnit XML: a test case per scene and body, failures with the message");
+
+  suggestCmd =
+      app.add_subcommand("suggest", "Estimate stable dt and propose stable T, P, T_theta, P_theta for a scene");
+  suggestCmd->add_option("scenes", suggest.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  addRunOverrides(suggestCmd, suggest.overrides);
+  suggestCmd
+      ->add_option("--keep-volume", suggest.keepVolume,
+                   "Volume fraction each body should keep through its first impact; suggest simulates the scene "
+                   "to predict the squash, and the periods that keep this much (default 0.85)")
+      ->check(kFraction);
+
+  studyCmd = app.add_subcommand("study", "Work-precision (accuracy) or stability study of the integrators");
+  studyCmd->add_option("kind", study.kind, "accuracy or stability")
+      ->required()
+      ->check(CLI::IsMember({"accuracy", "stability"}));
+  studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")->capture_default_str();
+  studyCmd->add_option("--scenes", study.scenes, "Showcase scenes for the accuracy study (default: scenes/*.toml)")
+      ->check(CLI::ExistingFile);
+  studyCmd->add_flag("--quick", study.quick, "Small cases and few repeats (seconds; for tests and CI)");
+  studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1000));
+
+#ifdef SPRINGY_HAVE_RENDER
+  renderCmd = app.add_subcommand("render", "Simulate scenes and encode MP4 videos (H.264)");
+  renderCmd->add_option("scenes", render.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  renderCmd->add_option("-o,--output", render.output,
+                        "Output .mp4 for one scene, or a directory (default: SCENE.mp4 here)");
+  addRunOverrides(renderCmd, render.overrides);
+  addRenderOverrides(renderCmd, render.render);
+  renderCmd->add_option("--crf", render.render.crf, "H.264 quality, 0-51, lower is better");
+  renderCmd->add_option("--preset", render.render.preset, "x264 preset (ultrafast ... veryslow)");
+
+  framesCmd = app.add_subcommand("frames", "Write PNG stills at chosen times, and a contact sheet");
+  framesCmd->add_option("scenes", frames.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  framesCmd->add_option("-o,--output", frames.output, "Output directory")->capture_default_str();
+  framesCmd->add_option("--times", frames.times, "Comma-separated times in seconds (default: 8 evenly spaced)");
+  framesCmd->add_flag("--sheet", frames.sheet, "Also write SCENE_sheet.png, a labelled grid of the stills");
+  framesCmd->add_flag("--sheet-only", frames.sheetOnly, "Write only the contact sheet");
+  addRunOverrides(framesCmd, frames.overrides);
+  addRenderOverrides(framesCmd, frames.render);
+#endif
+
+  sweepCmd = app.add_subcommand("sweep", "Run a scene (or several) over a grid or list of settings (docs/sweeps.md)");
+  sweepCmd->add_option("spec", sweep.spec, "Sweep spec (.toml)")->required()->check(CLI::ExistingFile);
+  sweepCmd->add_option("-o,--output", sweep.output,
+                       "Directory of the manifest, results and table (default: SPEC's name + .sweep, here)");
+  sweepCmd
+      ->add_option("-j,--jobs", sweep.jobs,
+                   "At most this many tasks at once (default: one per core; never more threads than cores in all)")
+      ->check(CLI::Range(1u, 4096u));
+  sweepCmd->add_flag("--manifest-only", sweep.manifestOnly,
+                     "Write the manifest and stop (run its tasks with run-task: GNU parallel, a scheduler)");
+  sweepCmd->add_flag("--slurm", sweep.slurm,
+                     "Submit the tasks as a Slurm job array (sbatch), and a gather job that runs after it");
+  sweepCmd->add_option("--cpus-per-task", sweep.cpusPerTask, "Slurm: cores (and simulation threads) per task")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 256u));
+  sweepCmd->add_option("--max-running", sweep.maxRunning, "Slurm: tasks running at once (--array=0-N%K; default all)")
+      ->check(CLI::Range(1u, 100000u));
+  sweepCmd
+      ->add_option("--sbatch-arg", sweep.sbatchArgs,
+                   "Slurm: one more sbatch option for both jobs, e.g. --sbatch-arg=--partition=debug (repeatable)")
+      ->allow_extra_args(false);
+
+  runTaskCmd = app.add_subcommand("run-task", "Run one task of a sweep's manifest (skipped when already finished)");
+  runTaskCmd->add_option("manifest", runTask.manifest, "The sweep's manifest.jsonl")->required();
+  runTaskCmd
+      ->add_option("--index", runTask.index,
+                   "The task, from 0 (default: $SLURM_ARRAY_TASK_ID, else $JOB_COMPLETION_INDEX, else "
+                   "$PARALLEL_SEQ - 1)")
+      ->check(CLI::Range(0L, 100000000L));
+  runTaskCmd
+      ->add_option("--threads", runTask.threads,
+                   "Simulation threads, unless the task sets them (default: $SLURM_CPUS_PER_TASK, else as "
+                   "every command)")
+      ->check(CLI::Range(1u, 256u));
+
+  gatherCmd = app.add_subcommand("gather", "Collect a sweep's results into its table (CSV, JSON) and map (PNG)");
+  gatherCmd->add_option("manifest", gather.manifest, "The sweep's manifest.jsonl")->required();
+}
+
+int CommandLine::dispatch() {
+  if (checkCmd->parsed()) return runCheck(check);
+  if (suggestCmd->parsed()) return runSuggest(suggest);
+  if (studyCmd->parsed()) return runStudy(study);
+#ifdef SPRINGY_HAVE_RENDER
+  if (renderCmd->parsed()) return runRender(render);
+  if (framesCmd->parsed()) return runFrames(frames);
+#endif
+  if (sweepCmd->parsed()) return runSweep(sweep);
+  if (runTaskCmd->parsed()) return springy::runTask(runTask);
+  if (gatherCmd->parsed()) return runGather(gather);
+  return 0;
+}
+
+void parseCommandLine(CommandLine& cli, std::vector<std::string> args) {
+  std::reverse(args.begin(), args.end());  // CLI11 takes them last first
+  cli.app.parse(args);
+}
+
+}  // namespace springy

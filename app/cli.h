@@ -1,0 +1,44 @@
+// springy app: the command line, built once per parse. main() parses the process's arguments
+// with it; `run-task` parses a sweep task's command with a fresh one, so that a task runs exactly
+// the command its manifest line shows.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "app/commands.h"
+
+namespace springy {
+
+struct CommandLine {
+  CommandLine();
+  CommandLine(const CommandLine&) = delete;
+  CommandLine& operator=(const CommandLine&) = delete;
+
+  // Runs the parsed subcommand; returns its exit status. Throws springy::Error.
+  int dispatch();
+
+  CLI::App app{"springy: soft bodies as springy meshes, simulated and rendered offscreen"};
+  CheckOptions check;
+  SuggestOptions suggest;
+  StudyOptions study;
+  RenderOptions render;
+  FramesOptions frames;
+  SweepOptions sweep;
+  RunTaskOptions runTask;
+  GatherOptions gather;
+  CLI::App* checkCmd = nullptr;
+  CLI::App* suggestCmd = nullptr;
+  CLI::App* studyCmd = nullptr;
+  CLI::App* renderCmd = nullptr;  // null without the renderer
+  CLI::App* framesCmd = nullptr;
+  CLI::App* sweepCmd = nullptr;
+  CLI::App* runTaskCmd = nullptr;
+  CLI::App* gatherCmd = nullptr;
+};
+
+// Parses `args` (without the program's name) into `cli`. Throws CLI::ParseError.
+void parseCommandLine(CommandLine& cli, std::vector<std::string> args);
+
+}  // namespace springy

@@ -4,8 +4,10 @@
 // task per core) or submits them to Slurm as a job array with a gather job after it.
 // `springy run-task MANIFEST`: runs one task and writes its result.
 #include <fcntl.h>
+#include <poll.h>
 #include <sched.h>
 #include <spawn.h>
+#include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -427,6 +429,24 @@ std::string describe(const SweepTask& t) {
   return text;
 }
 
+// Sleeps until one of the children may have exited, a signal arrived, or 200 ms passed: a poll on
+// the children's pidfds (Linux 5.3+; poll is never restarted after a signal handler, so an
+// interrupt wakes it), or a 20 ms nap where pidfds are not available.
+void waitForAChild(const std::vector<pid_t>& children) {
+  std::vector<pollfd> fds;
+  for (const pid_t child : children) {
+    const int fd = static_cast<int>(::syscall(SYS_pidfd_open, child, 0));
+    if (fd < 0) break;
+    fds.push_back({fd, POLLIN, 0});
+  }
+  if (fds.size() == children.size() && !fds.empty()) {
+    ::poll(fds.data(), fds.size(), 200);
+  } else {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  for (const pollfd& p : fds) ::close(p.fd);
+}
+
 pid_t spawnTask(const std::string& exe, const SweepTask& task, unsigned threads) {
   makeDirectories(fs::path(task.log).parent_path().string(), "logs");
   posix_spawn_file_actions_t actions;
@@ -504,7 +524,9 @@ int runLocally(const std::vector<SweepTask>& tasks, unsigned jobs) {
                      tasks.size());
         return interruptedExitStatus();
       }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      std::vector<pid_t> children;
+      for (const auto& [child, r] : running) children.push_back(child);
+      waitForAChild(children);
       continue;
     }
     const auto it = running.find(pid);

@@ -77,9 +77,15 @@ int runCheck(const CheckOptions& options) {
     MonitorLimits limits;
     limits.minVolume = options.minVolume;
     Monitor monitor(world, limits);
-    std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%d substeps), %g s\n", path.c_str(),
-                scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
-                std::string(integratorName(scene.integrator)).c_str(), scene.dt, scene.substeps, scene.duration);
+    if (world.adaptive()) {
+      std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s (adaptive), tolerance %g, %g s\n", path.c_str(),
+                  scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
+                  std::string(integratorName(scene.integrator)).c_str(), scene.tolerance, scene.duration);
+    } else {
+      std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%d substeps), %g s\n", path.c_str(),
+                  scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
+                  std::string(integratorName(scene.integrator)).c_str(), scene.dt, scene.substeps, scene.duration);
+    }
     std::printf("  stages: forces [");
     for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
       std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
@@ -145,6 +151,16 @@ int runCheck(const CheckOptions& options) {
         std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
                     r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
       }
+    }
+    if (world.adaptive()) {
+      const StepStats& st = world.stepStats();
+      std::printf(
+          "  adaptive: %llu steps (%llu landing on a frame), %llu rejected (%llu for an impact), step %.3g to "
+          "%.3g s, mean %.3g s, %llu force evaluations\n",
+          static_cast<unsigned long long>(st.accepted), static_cast<unsigned long long>(st.landed),
+          static_cast<unsigned long long>(st.rejected), static_cast<unsigned long long>(st.contactRejected),
+          st.smallest, st.largest, world.time() / static_cast<double>(std::max<uint64_t>(st.accepted, 1)),
+          static_cast<unsigned long long>(world.forceEvaluations()));
     }
     if (const ImplicitSolver* solver = world.implicitSolver()) {
       const ImplicitStats& st = solver->stats();

@@ -24,7 +24,10 @@ const CLI::Validator kFraction(
 
 void addRunOverrides(CLI::App* cmd, RunOverrides& o) {
   cmd->add_option("--integrator", o.integrator, "Override the scene's integrator: " + integratorNames());
-  cmd->add_option("--dt", o.dt, "Override the scene's time step [s]");
+  cmd->add_option("--dt", o.dt, "Override the scene's time step [s] (the adaptive integrator's first step)");
+  cmd->add_option("--tolerance", o.tolerance,
+                  "Choose each step by a tolerance: the adaptive integrator (bs32), each step's error at most "
+                  "this fraction of each body's size (e.g. 1e-4)");
   cmd->add_option_function<std::string>(
       "--substeps",
       [&o](const std::string& text) {
@@ -101,12 +104,19 @@ CommandLine::CommandLine() {
                    "to predict the squash, and the periods that keep this much (default 0.85)")
       ->check(kFraction);
 
-  studyCmd = app.add_subcommand("study", "Work-precision (accuracy) or stability study of the integrators");
-  studyCmd->add_option("kind", study.kind, "accuracy or stability")
+  studyCmd = app.add_subcommand(
+      "study", "Work-precision study of the integrators (accuracy: before contact; contact: whole runs), or stability");
+  studyCmd->add_option("kind", study.kind, "accuracy, contact or stability")
       ->required()
-      ->check(CLI::IsMember({"accuracy", "stability"}));
+      ->check(CLI::IsMember({"accuracy", "contact", "stability"}));
+  studyCmd
+      ->add_option("--max-duration", study.maxDuration,
+                   "contact: study at most this many seconds of each scene (default: all of it)")
+      ->check(CLI::PositiveNumber);
   studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")->capture_default_str();
-  studyCmd->add_option("--scenes", study.scenes, "Showcase scenes for the accuracy study (default: scenes/*.toml)")
+  studyCmd
+      ->add_option("--scenes", study.scenes,
+                   "Scenes for the accuracy and contact studies (default: the showcase scenes)")
       ->check(CLI::ExistingFile);
   studyCmd->add_flag("--quick", study.quick, "Small cases and few repeats (seconds; for tests and CI)");
   studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")

@@ -66,11 +66,12 @@ struct SuggestOptions {
 int runSuggest(const SuggestOptions& options);
 
 struct StudyOptions {
-  std::string kind;               // "accuracy" or "stability"
+  std::string kind;               // "accuracy", "contact" or "stability"
   std::string output = "study";   // directory
   std::vector<std::string> scenes;  // showcase scenes for the accuracy study
   bool quick = false;
   int repeats = 3;
+  double maxDuration = 0;  // contact: study at most this much of each scene [s] (0: all)
 };
 int runStudy(const StudyOptions& options);
 

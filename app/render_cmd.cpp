@@ -319,7 +319,7 @@ int framesOne(const std::string& path, const FramesOptions& options) {
     const std::string file = (fs::path(options.output) / (stem + name)).string();
     // Step frame by frame so the monitor sees the run as densely as a video would, and a signal
     // stops the run within a frame's simulation.
-    while (world.time() < t - 0.5 * world.dt()) {
+    while (!world.reached(t)) {
       if (interrupted()) return stopped(options.sheetOnly ? "the contact sheet" : file);
       const double next = std::min(t, world.time() + frame);
       if (std::optional<Failure> failure = advanceTo(world, monitor, next)) {

@@ -119,6 +119,16 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
   if (overrides.integrator && !parseIntegrator(*overrides.integrator, scene.integrator)) {
     throw Error("--integrator: '" + *overrides.integrator + "' is not one of: " + integratorNames());
   }
+  if (overrides.tolerance) {
+    if (!(*overrides.tolerance >= 1e-12 && *overrides.tolerance <= 0.5)) {
+      throw Error("--tolerance must be a number from 1e-12 to 0.5 (a fraction of each body's size)");
+    }
+    if (overrides.integrator && scene.integrator != Integrator::BogackiShampine) {
+      throw Error("--tolerance needs the adaptive integrator (bs32), not --integrator " + *overrides.integrator);
+    }
+    scene.tolerance = *overrides.tolerance;
+    scene.integrator = Integrator::BogackiShampine;
+  }
   if (overrides.dt) {
     if (!(*overrides.dt > 0.0) || !std::isfinite(*overrides.dt)) throw Error("--dt must be a positive finite number of seconds");
     scene.dt = *overrides.dt;
@@ -135,7 +145,7 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     }
     scene.substeps = *overrides.substeps;
   }
-  if (advise) {
+  if (advise && scene.integrator != Integrator::BogackiShampine) {  // the adaptive step needs no advice
     const StepChoice choice = overrides.autoSubsteps ? StepChoice::AutoSubsteps
                               : !scene.stepGiven && !overrides.dt && !overrides.substeps ? StepChoice::Default
                                                                                          : StepChoice::Warn;
@@ -149,15 +159,21 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
 
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides) {
   World world(buildModel(scene), scene.integrator, stepSize(scene));
+  if (world.adaptive()) world.setTolerance(scene.tolerance);
   world.setThreads(overrides.threads ? *overrides.threads : defaultThreadCount());
   return world;
 }
 
 std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time) {
-  while (world.time() < time - 0.5 * world.dt()) {
+  while (!world.reached(time)) {
     // Polled every step, so that a long frame (a fine step, a large model) stops at once.
     if (interrupted()) return std::nullopt;
-    world.step();
+    world.stepToward(time);
+    if (!world.stepProblem().empty()) {
+      std::optional<Failure> failure = monitor.check(world);  // a blow-up it sees says more
+      if (failure) return failure;
+      return Failure{0, world.stepCount(), world.time(), world.stepProblem()};
+    }
   }
   return monitor.check(world);
 }

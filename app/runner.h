@@ -15,6 +15,7 @@ namespace springy {
 struct RunOverrides {
   std::optional<std::string> integrator;
   std::optional<double> dt, duration;
+  std::optional<double> tolerance;  // --tolerance: the adaptive integrator (bs32) at this tolerance
   std::optional<int> substeps;
   bool autoSubsteps = false;  // --substeps auto: the stability advisor picks them
   std::optional<unsigned> threads;  // --threads (default: SPRINGY_THREADS, else every core)
@@ -40,7 +41,8 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
 // SPRINGY_THREADS.
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides);
 
-// Steps `world` until `time` (within half a step), checking the monitor after the last step.
+// Steps `world` until `time` (within half a step; the adaptive step lands on it), checking the
+// monitor after the last step (and reporting an adaptive step that cannot meet its tolerance).
 // Returns the failure, if any. Stops early, with nothing to report, when interrupted() (a
 // signal): the caller sees the flag and stops.
 std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time);

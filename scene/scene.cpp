@@ -655,6 +655,10 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
         r.fail(*n, "integrator", "must be one of: " + integratorNames());
       }
     }
+    if (r.has("tolerance")) {
+      scene.tolerance = r.inRange("tolerance", scene.tolerance, 1e-12, 0.5);
+      scene.integrator = Integrator::BogackiShampine;  // a tolerance asks for the adaptive step
+    }
     scene.restingSpeed = r.number("resting_speed", scene.restingSpeed);
     r.finish();
   }
@@ -795,7 +799,7 @@ std::optional<std::string> runSettingsProblem(const SceneDesc& scene) {
     return text.str();
   }
   const double steps = scene.duration / stepSize(scene);
-  if (!(steps <= kMaxSteps)) {
+  if (scene.integrator != Integrator::BogackiShampine && !(steps <= kMaxSteps)) {
     text << "duration " << scene.duration << " s in steps of " << stepSize(scene) << " s (dt / substeps) is " << steps
          << " steps, more than the limit of " << kMaxSteps;
     return text.str();

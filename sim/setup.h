@@ -21,6 +21,7 @@ struct SimulationDesc {
   int substeps = 1;        // steps of dt / substeps per dt
   bool stepGiven = false;  // dt or substeps were given (otherwise the advisor chooses the step)
   Integrator integrator = Integrator::RK4;
+  double tolerance = 1e-4;     // the adaptive integrator's (bs32): local error / body size per step
   double restingSpeed = -1.0;  // < 0: automatic (see buildModel)
   // Environment.
   Vec3 gravity{0.0, -9.81, 0.0};

@@ -41,6 +41,13 @@ State stepMode(Integrator integrator, double w2, double g, double h, State s) {
       const double k4x = s.v + h * k3v, k4v = a(s.x + h * k3x, s.v + h * k3v);
       return {s.x + h / 6 * (k1x + 2 * k2x + 2 * k3x + k4x), s.v + h / 6 * (k1v + 2 * k2v + 2 * k3v + k4v)};
     }
+    case Integrator::BogackiShampine: {  // its third-order solution
+      const double k1x = s.v, k1v = a(s.x, s.v);
+      const double k2x = s.v + 0.5 * h * k1v, k2v = a(s.x + 0.5 * h * k1x, s.v + 0.5 * h * k1v);
+      const double k3x = s.v + 0.75 * h * k2v, k3v = a(s.x + 0.75 * h * k2x, s.v + 0.75 * h * k2v);
+      return {s.x + h * (2.0 / 9 * k1x + 1.0 / 3 * k2x + 4.0 / 9 * k3x),
+              s.v + h * (2.0 / 9 * k1v + 1.0 / 3 * k2v + 4.0 / 9 * k3v)};
+    }
     case Integrator::BackwardEuler: {
       // (1 + h g + h^2 w2) v1 = v - h w2 x ; x1 = x + h v1
       const double v = (s.v - h * w2 * s.x) / (1 + h * g + h * h * w2);

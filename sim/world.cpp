@@ -4,8 +4,11 @@
 #include <atomic>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include "sim/implicit.h"
+#include "sim/stability.h"
 
 namespace springy {
 namespace {
@@ -15,11 +18,34 @@ struct IntegratorEntry {
   std::string_view name;
 };
 constexpr IntegratorEntry kIntegrators[] = {
-    {Integrator::ExplicitEuler, "explicit_euler"}, {Integrator::SymplecticEuler, "symplectic_euler"},
-    {Integrator::VelocityVerlet, "verlet"},        {Integrator::Leapfrog, "leapfrog"},
+    {Integrator::ExplicitEuler, "explicit_euler"},
+    {Integrator::SymplecticEuler, "symplectic_euler"},
+    {Integrator::VelocityVerlet, "verlet"},
+    {Integrator::Leapfrog, "leapfrog"},
     {Integrator::RK4, "rk4"},
     {Integrator::BackwardEuler, "backward_euler"},
+    {Integrator::BogackiShampine, "bs32"},
 };
+
+// The largest of fn(i) over [begin, end) (0 for none); a NaN wins (it must stop the step).
+template <class F>
+double largestOver(std::size_t begin, std::size_t end, F&& fn) {
+  double m = 0.0;
+  for (std::size_t i = begin; i < end; ++i) {
+    const double e = fn(i);
+    if (!(e <= m)) m = std::isnan(m) ? m : e;
+  }
+  return m;
+}
+
+// Folds a share's largest value into `out` (one compare-and-swap per share; a maximum does not
+// depend on the order shares finish in, so neither does the result).
+void foldLargest(std::atomic<double>& out, double value) {
+  double seen = out.load(std::memory_order_relaxed);
+  while ((value > seen || (std::isnan(value) && !std::isnan(seen))) &&
+         !out.compare_exchange_weak(seen, value, std::memory_order_relaxed)) {
+  }
+}
 
 }  // namespace
 
@@ -69,6 +95,37 @@ World::World(Model model, Integrator integrator, double dt)
   if (integrator_ == Integrator::VelocityVerlet || integrator_ == Integrator::Leapfrog) vs_.assign(n, Vec3{});
   if (integrator_ == Integrator::VelocityVerlet) aNext_.assign(n, Vec3{});
   if (integrator_ == Integrator::BackwardEuler) implicit_ = std::make_unique<ImplicitSolver>(*model_);
+  if (adaptive()) {
+    for (auto* buffer : {&k1v_, &k2x_, &k2v_, &k3x_, &k3v_, &xs_, &vs_, &xn_, &vn_}) buffer->assign(n, Vec3{});
+    if (contacts_) vBefore_.assign(n, Vec3{});
+    if (!model_->colliders.empty()) lastContactTime_.assign(n, -std::numeric_limits<double>::infinity());
+    hNext_ = dt_;
+    setTolerance(tolerance_);
+    updateStableStep();
+  }
+}
+
+void World::updateStableStep() {
+  // The advisor's bound (sim/stability.h) at the current shape: a compressed body is stiffer.
+  // The horizon only matters for methods that amplify every mode, which this one does not.
+  const double limit = estimateStability(*model_, x_, Integrator::BogackiShampine, 1.0).dtMax;
+  sinceStableUpdate_ = 0;
+  stableStep_ = std::isfinite(limit) ? kStableFraction * limit : std::numeric_limits<double>::infinity();
+}
+
+void World::setTolerance(double tolerance) {
+  assert(tolerance > 0.0);
+  tolerance_ = tolerance;
+  invScale_.assign(model_->vertexCount(), 0.0);
+  for (const BodyInfo& b : model_->bodies) {
+    const double scale = 1.0 / (tolerance * std::max(b.restSize, 1e-9));
+    std::fill(invScale_.begin() + b.firstVertex, invScale_.begin() + b.firstVertex + b.vertexCount, scale);
+  }
+}
+
+bool World::restingAt(std::size_t i) const {
+  if (adaptive()) return time_ - lastContactTime_[i] <= model_->colliders.restingWindow;
+  return sinceContact_[i] <= restingSteps_;
 }
 
 template <class F>
@@ -87,6 +144,7 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
   time_ = time;
   cachedAccelerationValid_ = false;
   std::fill(sinceContact_.begin(), sinceContact_.end(), 0xFFFF);
+  std::fill(lastContactTime_.begin(), lastContactTime_.end(), -std::numeric_limits<double>::infinity());
 }
 
 void World::step() {
@@ -104,10 +162,34 @@ void World::step() {
     case Integrator::Leapfrog: stepLeapfrog(); break;
     case Integrator::RK4: stepRK4(); break;
     case Integrator::BackwardEuler: stepBackwardEuler(); break;
+    case Integrator::BogackiShampine:
+      stepBogackiShampine();
+      if (!stepProblem_.empty()) return;  // no step taken
+      break;
   }
   // Contact between and within bodies, over the whole step's paths.
-  if (contacts_ && contacts_->resolve(xOld_, x_, v_, dt_)) cachedAccelerationValid_ = false;
-  time_ += dt_;
+  if (contacts_) {
+    if (adaptive()) std::copy(v_.begin(), v_.end(), vBefore_.begin());
+    if (contacts_->resolve(xOld_, x_, v_, dt_)) {
+      cachedAccelerationValid_ = false;
+      // The adaptive step: a velocity change dv applied at the end of the step instead of at
+      // the contact (on average half-way) misplaces the vertex by about |dv| h / 2; the next
+      // step is kept short enough for that to stay within the tolerance.
+      if (adaptive()) {
+        const Vec3 *v = v_.data(), *vb = vBefore_.data();
+        const double* inv = invScale_.data();
+        const double h = dt_;
+        std::atomic<double> worst{0.0};
+        forVertices([&](std::size_t begin, std::size_t end) {
+          foldLargest(worst,
+                      largestOver(begin, end, [&](std::size_t i) { return length(v[i] - vb[i]) * 0.5 * h * inv[i]; }));
+        });
+        const double e = worst.load();
+        if (e > 1.0) hNext_ = std::min(hNext_, 0.9 * h / e);
+      }
+    }
+  }
+  time_ = adaptive() && landed_ ? stop_ : time_ + dt_;
   ++steps_;
 }
 
@@ -210,9 +292,150 @@ void World::stepBackwardEuler() {
   if (!model_->colliders.empty()) lastPass([](std::size_t) {});  // the static colliders' pass
 }
 
+void World::stepBogackiShampine() {
+  // Bogacki & Shampine, "A 3(2) pair of Runge-Kutta formulas", Appl. Math. Lett. 2 (1989):
+  //   k1 = f(y), k2 = f(y + h/2 k1), k3 = f(y + 3h/4 k2),
+  //   y1 = y + h (2/9 k1 + 1/3 k2 + 4/9 k3)                      (third order)
+  //   y1 - y1^ = h (-5/72 k1 + 1/12 k2 + 1/9 k3 - 1/8 k4),  k4 = f(y1)
+  // The estimate is taken in positions, whose slope is the velocity: k4's position part is the
+  // candidate's own velocity, so the estimate needs no fourth evaluation; three per step (k1
+  // once per step however often it is taken again), two per rejected try.
+  const double t = time_;
+  const Vec3 *x = x_.data(), *v = v_.data();
+  Vec3 *k1v = k1v_.data(), *k2x = k2x_.data(), *k2v = k2v_.data(), *k3x = k3x_.data(), *k3v = k3v_.data();
+  Vec3 *xs = xs_.data(), *vs = vs_.data(), *xn = xn_.data(), *vn = vn_.data();
+  const double* inv = invScale_.data();
+  accelerations(x, v, t, k1v);
+  const bool impacts = !model_->colliders.empty();
+  for (bool rejected = false;; rejected = true) {
+    // The step: the controller's, shortened to land on the stop (or to halve what is left, so
+    // that no sliver of a step remains before it).
+    const double wanted = std::min(hNext_, stableStep_);
+    double h = wanted;
+    landed_ = false;
+    if (stop_ > t) {
+      const double left = stop_ - t;
+      if (h >= left) {
+        h = left;
+        landed_ = true;
+      } else if (2.0 * h > left) {
+        h = 0.5 * left;
+      }
+    }
+    if (!landed_ && h < kMinAdaptiveStep) {
+      char text[320];
+      if (stableStep_ < kMinAdaptiveStep) {
+        std::snprintf(text, sizeof text,
+                      "at t = %.6g s the adaptive step fell below %.3g s: the stiffest mode is stable only below "
+                      "%.3g s; try longer periods (a softer material) or --integrator backward_euler",
+                      t, kMinAdaptiveStep, stableStep_ / kStableFraction);
+      } else {
+        std::snprintf(text, sizeof text,
+                      "at t = %.6g s the adaptive step fell below %.3g s without meeting the tolerance %.3g; try a "
+                      "larger --tolerance, or a fixed step (--integrator rk4 --dt ...)",
+                      t, kMinAdaptiveStep, tolerance_);
+      }
+      stepProblem_ = text;
+      return;
+    }
+    const auto stage = [&](double c, const Vec3* kx, const Vec3* kv, Vec3* nextKx) {
+      forVertices([&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+          xs[i] = x[i] + kx[i] * (c * h);
+          vs[i] = v[i] + kv[i] * (c * h);
+          nextKx[i] = vs[i];
+        }
+      });
+    };
+    stage(0.5, v, k1v, k2x);
+    accelerations(xs, vs, t + 0.5 * h, k2v);
+    stage(0.75, k2x, k2v, k3x);
+    accelerations(xs, vs, t + 0.75 * h, k3v);
+    // The candidate and its embedded error (positions, relative to the tolerance x body size).
+    std::atomic<double> worst{0.0};
+    forVertices([&](std::size_t begin, std::size_t end) {
+      foldLargest(worst, largestOver(begin, end, [&](std::size_t i) {
+                    xn[i] = x[i] + (v[i] * (2.0 / 9.0) + k2x[i] * (1.0 / 3.0) + k3x[i] * (4.0 / 9.0)) * h;
+                    vn[i] = v[i] + (k1v[i] * (2.0 / 9.0) + k2v[i] * (1.0 / 3.0) + k3v[i] * (4.0 / 9.0)) * h;
+                    const Vec3 e =
+                        (v[i] * (-5.0 / 72.0) + k2x[i] * (1.0 / 12.0) + k3x[i] * (1.0 / 9.0) - vn[i] * 0.125) * h;
+                    return length(e) * inv[i];
+                  }));
+    });
+    const double embedded = worst.load();
+    // A step whose candidate is not finite is taken: the monitor names the blow-up.
+    if (std::isnan(embedded)) {
+      accept(h, wanted, 1.0, 1.0, rejected);
+      return;
+    }
+    const double impact = impacts && embedded <= 1.0 ? impactError(h) : 0.0;
+    if (embedded <= 1.0 && impact <= 1.0) {
+      // PI controller on the embedded error (local error ~ h^3: exponents 0.7/3 and 0.4/3).
+      // The impact error grows like h^2 in sustained contact (the velocity a step stops grows
+      // like h) and like h at a first impact: the square root serves both (measured: with
+      // the inverse, four times as many steps were taken again).
+      const double e = std::max(embedded, 1e-10);
+      double factor = 0.9 * std::pow(e, -0.7 / 3.0) * std::pow(errorBefore_, 0.4 / 3.0);
+      if (impact > 0.0) factor = std::min(factor, 0.9 / std::sqrt(impact));
+      accept(h, wanted, std::clamp(factor, 0.2, 5.0), e, rejected);
+      return;
+    }
+    ++stats_.rejected;
+    if (impact > 1.0) ++stats_.contactRejected;
+    const double factor = impact > 1.0 ? 0.9 / std::sqrt(impact) : 0.9 * std::pow(embedded, -1.0 / 3.0);
+    hNext_ = h * std::clamp(factor, 0.1, 0.9);
+  }
+}
+
+void World::accept(double h, double wanted, double factor, double error, bool afterRejection) {
+  // After a rejection the step does not grow again at once (Hairer & Wanner's rule).
+  if (afterRejection) factor = std::min(factor, 1.0);
+  errorBefore_ = error;
+  dt_ = h;
+  // A step shortened to land on the stop says little about the next one's length.
+  hNext_ = landed_ ? std::max(factor * h, std::min(factor, 1.0) * wanted) : factor * h;
+  stats_.largest = std::max(stats_.largest, h);
+  if (!landed_) {
+    stats_.smallest = stats_.accepted == stats_.landed ? h : std::min(stats_.smallest, h);
+  } else {
+    ++stats_.landed;
+  }
+  if (landed_ || ++sinceStableUpdate_ >= 4) updateStableStep();
+  ++stats_.accepted;
+  Vec3 *x = x_.data(), *v = v_.data();
+  const Vec3 *xn = xn_.data(), *vn = vn_.data();
+  lastPass([&](std::size_t i) {
+    x[i] = xn[i];
+    v[i] = vn[i];
+  });
+}
+
+double World::impactError(double h) const {
+  // A vertex that hits a static collider at a fraction s of the step is stopped there and given
+  // its new velocity at the end of the step: the velocity change dv comes (1 - s) h late, which
+  // misplaces it by about |dv| (1 - s) h. Read-only (the collision itself happens once the step
+  // is accepted). Sustained contact counts too: a body pressing into the ground as it lands
+  // stops its lowest vertices at every step, which is where most of a landing's error is made.
+  const Colliders& colliders = model_->colliders;
+  const Vec3 *x = x_.data(), *xn = xn_.data(), *vn = vn_.data();
+  const double* inv = invScale_.data();
+  std::atomic<double> worst{0.0};
+  forVertices([&](std::size_t begin, std::size_t end) {
+    foldLargest(worst, largestOver(begin, end, [&](std::size_t i) {
+                  if (model_->invMass[i] == 0.0 || colliders.clearAt(xn[i])) return 0.0;
+                  ContactHit hit;
+                  if (!colliders.firstHit(x[i], xn[i], hit)) return 0.0;
+                  const Vec3 after =
+                      contactVelocity(vn[i], hit.normal, hit.material, colliders.restingSpeed, restingAt(i));
+                  return length(after - vn[i]) * (1.0 - hit.fraction) * h * inv[i];
+                }));
+  });
+  return worst.load();
+}
+
 bool World::savesOldInLastPass() const {
   return integrator_ == Integrator::ExplicitEuler || integrator_ == Integrator::SymplecticEuler ||
-         integrator_ == Integrator::RK4;
+         integrator_ == Integrator::RK4 || integrator_ == Integrator::BogackiShampine;
 }
 
 template <class Update>
@@ -236,9 +459,9 @@ bool World::collide(std::size_t begin, std::size_t end) {
   bool hitAny = false;
   for (std::size_t i = begin; i < end; ++i) {
     if (model_->invMass[i] == 0.0) continue;  // pinned
-    const bool hit =
-        !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], v_[i], sinceContact_[i] <= restingSteps_);
+    const bool hit = !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], v_[i], restingAt(i));
     sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
+    if (hit && adaptive()) lastContactTime_[i] = time_;
     const bool damped = layers && colliders.dampInLayers(x_[i], v_[i], dt_);
     hitAny = hitAny || hit || damped;
   }

@@ -39,6 +39,15 @@ enum class Integrator {
   Leapfrog,         // kick dt/2, drift dt, kick dt/2 (forces at both ends)  order 2, 2 evals/step
   RK4,              // classical Runge-Kutta, forces at all four stages      order 4
   BackwardEuler,    // implicit: Newton + CG on M dv = h f(x + h v1, v1)     order 1 (sim/implicit.h)
+  BogackiShampine,  // adaptive: embedded 3(2) pair, step chosen by a tolerance order 3, 3 evals/step
+};
+
+// The adaptive integrator's step statistics (World::stepStats).
+struct StepStats {
+  uint64_t accepted = 0, rejected = 0;
+  uint64_t contactRejected = 0;          // of the rejected: for a predicted impact's error
+  double smallest = 0.0, largest = 0.0;  // accepted steps [s] (the smallest: not one shortened to land on a stop)
+  uint64_t landed = 0;                   // accepted steps shortened to land on a stop
 };
 
 // Name used in scene files and on the command line ("explicit_euler", "rk4", ...).
@@ -58,8 +67,41 @@ class World {
   World(World&&) noexcept;
   World& operator=(World&&) noexcept;
 
-  // Advances the state by one step of dt.
+  // Advances the state by one step of dt (the adaptive integrator: one accepted step, of the
+  // size its tolerance allows, never past the stop set by stepToward).
   void step();
+  // One step toward `time`: the adaptive integrator lands on it exactly; a fixed step is dt.
+  void stepToward(double time) {
+    stop_ = time;
+    step();
+  }
+  // Whether the state has reached `time`: exactly for the adaptive step, within half a step for
+  // a fixed one.
+  bool reached(double time) const { return adaptive() ? time_ >= time : time_ >= time - 0.5 * dt_; }
+
+  // The adaptive integrator (Bogacki-Shampine 3(2), Integrator::BogackiShampine). Each step's
+  // local error is estimated twice: by the embedded second-order solution (the difference of
+  // the two, in positions) and, for each vertex about to hit a static collider, by the part of
+  // the step it would spend stopped at the surface instead of rebounding (|v_n| (1 - s) h: the
+  // collision is resolved at the end of the step, so that is what it misplaces). A step whose
+  // largest error exceeds `tolerance` times the vertex's body size is taken again, shorter; the
+  // next step follows a PI controller (Gustafsson; Hairer & Wanner, Solving ODEs II, IV.2) with
+  // safety factor 0.9. Contact between bodies is resolved after a step is accepted; the velocity
+  // change it makes bounds the next step the same way. Every decision is a maximum over
+  // vertices, so the step sequence is bit-identical on any thread count. dt() is the next step.
+  bool adaptive() const { return integrator_ == Integrator::BogackiShampine; }
+  void setTolerance(double tolerance);
+  double tolerance() const { return tolerance_; }
+  const StepStats& stepStats() const { return stats_; }
+  // Non-empty when the adaptive step could not meet its tolerance above kMinAdaptiveStep (the
+  // run must stop; the message says when and what to try).
+  const std::string& stepProblem() const { return stepProblem_; }
+  static constexpr double kMinAdaptiveStep = 1e-9;  // [s]
+  // The adaptive step never exceeds this fraction of the stability advisor's bound at the current
+  // shape (made again every 4 steps and at every stop: a compressed body is stiffer). The
+  // embedded estimate alone let a mode grow from round-off while it was still too small to see
+  // (the hanging sphere's energy rose within 0.07 s at tolerance 1e-3).
+  static constexpr double kStableFraction = 0.9;
 
   // Runs the step on up to `requested` threads (the calling thread included). Fewer are used
   // when the model has under `minVerticesPerThread` vertices per thread: below about that the
@@ -88,12 +130,15 @@ class World {
 
   const Model& model() const { return *model_; }
   Integrator integrator() const { return integrator_; }
-  double dt() const { return dt_; }
+  double dt() const { return dt_; }  // the step (the adaptive integrator's: the last one taken)
   double time() const { return time_; }
   uint64_t stepCount() const { return steps_; }
+  // Force evaluations so far by the explicit integrators (the work a step costs; backward
+  // Euler's solver evaluates through its own path and is not counted).
+  uint64_t forceEvaluations() const { return evaluations_; }
   // Whether vertex i is resting on a static collider: it touched one within the colliders'
   // resting window (Colliders::restingWindow). For drawing (a smooth surface stays flat there).
-  bool restsOnCollider(std::size_t i) const { return !sinceContact_.empty() && sinceContact_[i] <= restingSteps_; }
+  bool restsOnCollider(std::size_t i) const { return !sinceContact_.empty() && restingAt(i); }
   const std::vector<Vec3>& positions() const { return x_; }
   const std::vector<Vec3>& velocities() const { return v_; }
   const std::vector<ForceStage>& forceStages() const { return forces_->stages(); }
@@ -108,7 +153,10 @@ class World {
   void setState(std::vector<Vec3> x, std::vector<Vec3> v, double time = 0.0);
 
  private:
-  void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const { forces_->accelerations(x, v, t, a); }
+  void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
+    ++evaluations_;
+    forces_->accelerations(x, v, t, a);
+  }
   // Runs fn(begin, end) over [0, vertexCount) split among the threads.
   template <class F>
   void forVertices(F&& fn) const;
@@ -131,11 +179,23 @@ class World {
   void stepLeapfrog();
   void stepRK4();
   void stepBackwardEuler();
+  void stepBogackiShampine();
+  // The adaptive step's error estimates, as fractions of the tolerance (<= 1: accepted).
+  double impactError(double h) const;
+  // Takes the candidate state (xn_, vn_) as the step's end, resolving the static colliders; the
+  // controller's next step is factor x h.
+  void accept(double h, double wanted, double factor, double error, bool afterRejection);
+  // A vertex touched a static collider within the resting window (impacts are inelastic then).
+  bool restingAt(std::size_t i) const;
+  // The adaptive step's stability bound: kStableFraction of the stability advisor's estimate
+  // (sim/stability.h) at the current shape, made again every few steps and at every stop.
+  void updateStableStep();
   std::unique_ptr<Model> model_;  // on the heap: Forces keeps its address across moves of the World
   Integrator integrator_;
   double dt_;
   double time_ = 0.0;
   uint64_t steps_ = 0;
+  mutable uint64_t evaluations_ = 0;
   std::vector<Vec3> x_, v_;
   // Scratch, sized once.
   std::vector<Vec3> xOld_, a_, k1v_, k2x_, k2v_, k3x_, k3v_, k4v_, xs_, vs_, aNext_;
@@ -143,6 +203,19 @@ class World {
   int restingSteps_ = 0;                // contact within this many steps is resting contact
   bool dampingLayers_ = false;          // a plane has a damping layer (soft ground)
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
+  // The adaptive step.
+  double tolerance_ = 1e-4;
+  double stop_ = 0.0;                    // stepToward's target (ignored when not ahead)
+  double errorBefore_ = 1.0;             // the last accepted step's error (the PI controller's memory)
+  double hNext_ = 0.0;                   // the controller's next step [s]
+  double stableStep_ = 0.0;              // its stability bound [s] (updateStableStep)
+  int sinceStableUpdate_ = 0;            // accepted steps since it was made
+  bool landed_ = false;                  // the step in progress lands on stop_
+  std::vector<double> invScale_;         // per vertex: 1 / (tolerance x its body's rest size)
+  std::vector<double> lastContactTime_;  // per vertex: when it last touched a static collider
+  std::vector<Vec3> xn_, vn_, vBefore_;  // a step's candidate state; velocities before contact
+  StepStats stats_;
+  std::string stepProblem_;
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
   std::unique_ptr<Forces> forces_;          // the force stages, their scratch and the threads
   std::unique_ptr<BodyContacts> contacts_;  // null: no contact between or within bodies

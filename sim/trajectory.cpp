@@ -1,0 +1,82 @@
+#include "sim/trajectory.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "sim/diagnostics.h"
+#include "sim/monitor.h"
+
+namespace springy {
+
+RunPath tracePath(const Model& model, const PathSettings& settings) {
+  World world(model, settings.integrator, settings.dt);
+  if (world.adaptive()) world.setTolerance(settings.tolerance);
+  world.setThreads(settings.threads);
+  Monitor monitor(world);
+  RunPath path;
+  const auto frames = static_cast<long>(std::lround(settings.duration / settings.frame));
+  const auto sample = [&] {
+    path.times.push_back(world.time());
+    path.centroid.emplace_back();
+    path.volume.emplace_back();
+    for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+      const BodyMeasures m = measureBody(world, b);
+      path.centroid.back().push_back(m.centroid);
+      path.volume.back().push_back(m.volume);
+    }
+  };
+  sample();
+  double seconds = 0.0;
+  for (long f = 1; f <= frames; ++f) {
+    const double until = static_cast<double>(f) * settings.frame;
+    const auto start = std::chrono::steady_clock::now();
+    while (!world.reached(until) && world.stepProblem().empty()) world.stepToward(until);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (const auto failure = monitor.check(world)) {
+      path.failure = failure->message;
+      break;
+    }
+    if (!world.stepProblem().empty()) {
+      path.failure = world.stepProblem();
+      break;
+    }
+    sample();
+  }
+  path.complete = path.failure.empty();
+  path.wallSeconds = seconds;
+  path.steps = world.stepCount();
+  path.evaluations = world.forceEvaluations();
+  path.stepStats = world.stepStats();
+  return path;
+}
+
+PathError pathError(const Model& model, const RunPath& reference, const RunPath& run) {
+  if (!run.complete || !reference.complete || run.times.size() != reference.times.size()) {
+    throw std::invalid_argument("pathError: the runs do not share their frames");
+  }
+  PathError out;
+  const std::size_t frames = run.times.size();
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    const double size = model.bodies[b].restSize;
+    double sum = 0.0, lowestRef = reference.volume[0][b], lowestRun = run.volume[0][b];
+    for (std::size_t f = 0; f < frames; ++f) {
+      const double d = length(run.centroid[f][b] - reference.centroid[f][b]);
+      sum += d * d;
+      lowestRef = std::min(lowestRef, reference.volume[f][b]);
+      lowestRun = std::min(lowestRun, run.volume[f][b]);
+    }
+    const double rms = std::sqrt(sum / static_cast<double>(frames)) / size;
+    if (rms > out.centroidRms || b == 0) {
+      out.centroidRms = rms;
+      out.body = b;
+    }
+    out.endPosition =
+        std::max(out.endPosition, length(run.centroid[frames - 1][b] - reference.centroid[frames - 1][b]) / size);
+    if (lowestRef > 0.0) out.lowestVolume = std::max(out.lowestVolume, std::fabs(lowestRun - lowestRef) / lowestRef);
+  }
+  return out;
+}
+
+}  // namespace springy

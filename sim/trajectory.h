@@ -1,0 +1,53 @@
+// springy: a whole run's path as a viewer and a report see it, and its error against a
+// reference run: the measure of accuracy through contact (docs/accuracy.md, "Through contact").
+//
+// A run is sampled at its output frames (where a video shows it): each body's centroid and
+// volume. Two runs of the same scene compare frame by frame; fixed steps that divide the frame
+// interval and the adaptive step (which lands on every frame) sample at the same times, so no
+// interpolation blurs the comparison.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/model.h"
+#include "sim/world.h"
+
+namespace springy {
+
+struct PathSettings {
+  Integrator integrator = Integrator::RK4;
+  double dt = 0.002;        // fixed steps; the adaptive integrator's first step
+  double tolerance = 1e-4;  // the adaptive integrator's
+  double frame = 1.0 / 30;  // output interval [s]
+  double duration = 1.0;    // [s]
+  unsigned threads = 1;
+};
+
+struct RunPath {
+  std::vector<double> times;                // the frames reached
+  std::vector<std::vector<Vec3>> centroid;  // [frame][body]
+  std::vector<std::vector<double>> volume;  // [frame][body] (0 for an open surface)
+  bool complete = false;                    // reached the duration under the monitor
+  std::string failure;                      // the monitor's message otherwise
+  double wallSeconds = 0.0;                 // the stepping alone (no sampling)
+  uint64_t steps = 0, evaluations = 0;
+  StepStats stepStats;  // the adaptive integrator's
+};
+
+// Runs the model under the stability monitor, sampling every frame. Stops at the first failure.
+RunPath tracePath(const Model& model, const PathSettings& settings);
+
+// The error of `run` against `reference` (same model, same frames), the largest over bodies:
+struct PathError {
+  double centroidRms = 0.0;   // RMS over frames of the centroid's distance, / body size
+  double endPosition = 0.0;   // the last frame's centroid distance, / body size
+  double lowestVolume = 0.0;  // |lowest volume - reference's| / reference's (closed bodies)
+  uint32_t body = 0;          // the body with the largest centroidRms
+};
+// Throws std::invalid_argument when the runs do not share their frames (an incomplete run has
+// no error: its failure is the answer).
+PathError pathError(const Model& model, const RunPath& reference, const RunPath& run);
+
+}  // namespace springy

@@ -1,0 +1,167 @@
+// The adaptive integrator (bs32: Bogacki-Shampine 3(2) with a PI controller, `--tolerance`):
+// its error follows the tolerance, it lands on every stop, it shortens its step at an impact
+// and lengthens it in flight, its step sequence is the same on any thread count, and through
+// contact it reaches the fixed-step schemes' error for no more work.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "scene/scene.h"
+#include "sim/cases.h"
+#include "sim/diagnostics.h"
+#include "sim/monitor.h"
+#include "sim/stability.h"
+#include "sim/trajectory.h"
+
+namespace springy {
+namespace {
+
+std::string scenePath(const std::string& name) { return std::string(SPRINGY_SOURCE_DIR) + "/scenes/" + name + ".toml"; }
+
+// One mass on a damped spring pinned at its other end, released stretched: u'' = -k/m u - d/m u',
+// u(0) = u0, u'(0) = 0, so u(t) = u0 e^(-g t) (cos(w t) + g/w sin(w t)), g = d/2m, w^2 = k/m - g^2.
+struct Oscillator {
+  static constexpr double kMass = 1.0, kLength = 1.0, kStretch = 0.1, kDamping = 0.5;
+  static double stiffness() { return std::pow(2.0 * M_PI / 0.5, 2.0); }  // a period of 0.5 s
+  static Model model() {
+    Model m = strutModel(kMass, kMass, kLength, stiffness(), kDamping, true);
+    m.bodies[0].restSize = kLength;
+    m.restPosition[1].x = kLength + kStretch;
+    return m;
+  }
+  static double exact(double t) {
+    const double g = kDamping / (2.0 * kMass), w = std::sqrt(stiffness() / kMass - g * g);
+    return kLength + kStretch * std::exp(-g * t) * (std::cos(w * t) + g / w * std::sin(w * t));
+  }
+};
+
+// Runs the oscillator to `end` through stops every `frame` seconds; returns |x - exact| / length.
+double oscillatorError(double tolerance, double end, World* out = nullptr) {
+  World world(Oscillator::model(), Integrator::BogackiShampine, 1e-3);
+  world.setTolerance(tolerance);
+  for (int f = 1; f <= static_cast<int>(std::lround(end / 0.1)); ++f) {
+    const double stop = 0.1 * f;
+    while (!world.reached(stop)) world.stepToward(stop);
+    EXPECT_EQ(world.time(), stop) << "the adaptive step lands on every stop exactly";
+  }
+  const double error = std::fabs(world.positions()[1].x - Oscillator::exact(end)) / Oscillator::kLength;
+  if (out) *out = std::move(world);
+  return error;
+}
+
+TEST(Adaptive, ErrorOnADampedOscillatorFollowsTheTolerance) {
+  // The tolerance bounds each step's local error; over 2 s (four periods, a few hundred steps)
+  // the errors add up to a bounded multiple of it, which falls with it. Measured: tolerance 1e-4
+  // -> 1.1e-3, 1e-6 -> 2.8e-5, 1e-8 -> 4.1e-7 (11, 28 and 41 times the tolerance: the finer
+  // tolerances take more steps, whose local errors add).
+  const double coarse = oscillatorError(1e-4, 2.0), middle = oscillatorError(1e-6, 2.0),
+               fine = oscillatorError(1e-8, 2.0);
+  EXPECT_LT(coarse, 30 * 1e-4);
+  EXPECT_LT(middle, 60 * 1e-6);
+  EXPECT_LT(fine, 100 * 1e-8);
+  EXPECT_LT(middle, coarse / 20.0);
+  EXPECT_LT(fine, middle / 20.0);
+}
+
+TEST(Adaptive, TakesLongerStepsForALooserTolerance) {
+  World loose(Oscillator::model(), Integrator::BogackiShampine, 1e-3);
+  World tight(Oscillator::model(), Integrator::BogackiShampine, 1e-3);
+  oscillatorError(1e-3, 2.0, &loose);
+  oscillatorError(1e-7, 2.0, &tight);
+  // Steps scale like tolerance^(1/3) for a third-order method: 10^4 in tolerance, about 21 in steps.
+  const double ratio = static_cast<double>(tight.stepCount()) / static_cast<double>(loose.stepCount());
+  EXPECT_GT(ratio, 8.0);
+  EXPECT_LT(ratio, 50.0);
+}
+
+// A scene run with the adaptive step, frame by frame under the monitor.
+World runScene(const std::string& name, double tolerance, double duration, unsigned threads,
+               std::vector<std::pair<double, double>>* steps = nullptr) {
+  const SceneDesc scene = loadScene(scenePath(name));
+  World world(buildModel(scene), Integrator::BogackiShampine, stepSize(scene));
+  world.setTolerance(tolerance);
+  world.setThreads(threads, 1);  // split even a small model, so that the threads really share it
+  Monitor monitor(world);
+  const double frame = 1.0 / 30.0;
+  for (int f = 1; f <= static_cast<int>(std::lround(duration / frame)); ++f) {
+    const double stop = f * frame;
+    while (!world.reached(stop)) {
+      const double before = world.time();
+      world.stepToward(stop);
+      // Steps that end on a frame were shortened to land there: not the controller's choice.
+      if (steps && world.time() != stop) steps->push_back({before, world.dt()});
+    }
+    const auto failure = monitor.check(world);
+    EXPECT_FALSE(failure) << name << ": " << failure->message;
+    if (failure) break;
+  }
+  EXPECT_TRUE(world.stepProblem().empty()) << world.stepProblem();
+  return world;
+}
+
+TEST(Adaptive, ShortensTheStepAtAnImpactAndLengthensItInFlight) {
+  // The single sphere falls 14 m and lands at about 1.7 s (radius 6 m, released at 20 m).
+  std::vector<std::pair<double, double>> steps;
+  const World world = runScene("single_sphere", 1e-4, 3.0, 1, &steps);
+  const auto smallest =
+      *std::min_element(steps.begin(), steps.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  EXPECT_GT(smallest.first, 1.6) << "the smallest step is taken at the landing";
+  EXPECT_LT(smallest.first, 2.2);
+  std::vector<double> flight;
+  for (const auto& [t, dt] : steps) {
+    if (t < 1.5) flight.push_back(dt);
+  }
+  std::sort(flight.begin(), flight.end());
+  const double typicalFlight = flight[flight.size() / 2];
+  EXPECT_LT(smallest.second, typicalFlight / 5.0);
+  // In flight the step is at the stability bound (0.9 of the advisor's), not the scene's 2 ms.
+  const double bound =
+      World::kStableFraction *
+      estimateStability(world.model(), world.model().restPosition, Integrator::BogackiShampine, 1.0).dtMax;
+  EXPECT_GT(typicalFlight, 0.8 * bound);
+  EXPECT_LE(typicalFlight, bound * (1.0 + 1e-12));
+  EXPECT_GT(world.stepStats().rejected, 0u) << "an impact's first try is too long";
+}
+
+TEST(Adaptive, StepSequenceIsBitIdenticalAcrossRunsAndThreadCounts) {
+  // Plane contacts (spheres) and contact between bodies (head_on): every decision of the
+  // controller is a maximum over vertices, which no split of the vertices changes.
+  // The spheres land at 1.7 s; head_on's balls meet at 0.375 s.
+  for (const auto& [name, duration] : {std::pair<const char*, double>{"spheres", 2.0}, {"head_on", 0.5}}) {
+    const World one = runScene(name, 1e-4, duration, 1);
+    const World again = runScene(name, 1e-4, duration, 1);
+    const World three = runScene(name, 1e-4, duration, 3);
+    if (std::string(name) == "spheres") {
+      EXPECT_GT(one.stepStats().rejected, 0u) << "the comparison includes rejected steps";
+    } else {
+      ASSERT_NE(one.bodyContacts(), nullptr);
+      EXPECT_GT(one.bodyContacts()->sinceStart().impulses, 0u) << "the balls met";
+    }
+    for (const World* w : {&again, &three}) {
+      EXPECT_EQ(stateHash(*w), stateHash(one)) << name;
+      EXPECT_EQ(w->stepCount(), one.stepCount()) << name;
+      EXPECT_EQ(w->stepStats().rejected, one.stepStats().rejected) << name;
+      EXPECT_EQ(w->stepStats().smallest, one.stepStats().smallest) << name;
+      EXPECT_EQ(w->forceEvaluations(), one.forceEvaluations()) << name;
+    }
+  }
+}
+
+TEST(Adaptive, AModeNoStepAboveANanosecondCanHoldStopsWithAMessage) {
+  // 1e15 N/m on 1 ug: omega = 1e12 rad/s, stable only below about 2e-12 s. Rather than crawl
+  // through 1e12 steps a second, the run stops and says why and what to try.
+  Model model = strutModel(1e-9, 1e-9, 1.0, 1e15, 0.0, true);
+  model.bodies[0].restSize = 1.0;
+  model.restPosition[1].x = 1.01;
+  World world(model, Integrator::BogackiShampine, 1e-3);
+  world.stepToward(1.0);
+  ASSERT_FALSE(world.stepProblem().empty());
+  EXPECT_EQ(world.time(), 0.0) << "no step taken";
+  EXPECT_NE(world.stepProblem().find("stable only below"), std::string::npos) << world.stepProblem();
+  EXPECT_NE(world.stepProblem().find("backward_euler"), std::string::npos) << world.stepProblem();
+}
+
+}  // namespace
+}  // namespace springy

@@ -26,8 +26,8 @@ void addRunOverrides(CLI::App* cmd, RunOverrides& o) {
   cmd->add_option("--integrator", o.integrator, "Override the scene's integrator: " + integratorNames());
   cmd->add_option("--dt", o.dt, "Override the scene's time step [s] (the adaptive integrator's first step)");
   cmd->add_option("--tolerance", o.tolerance,
-                  "Choose each step by a tolerance: the adaptive integrator (bs32), each step's error at most "
-                  "this fraction of each body's size (e.g. 1e-4)");
+                  "Choose each step by a tolerance: an adaptive integrator (verlet_adaptive unless --integrator bs32), "
+                  "each step's error at most this fraction of each body's size (e.g. 1e-4)");
   cmd->add_option_function<std::string>(
       "--substeps",
       [&o](const std::string& text) {

@@ -123,11 +123,12 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     if (!(*overrides.tolerance >= 1e-12 && *overrides.tolerance <= 0.5)) {
       throw Error("--tolerance must be a number from 1e-12 to 0.5 (a fraction of each body's size)");
     }
-    if (overrides.integrator && scene.integrator != Integrator::BogackiShampine) {
-      throw Error("--tolerance needs the adaptive integrator (bs32), not --integrator " + *overrides.integrator);
+    if (overrides.integrator && !isAdaptive(scene.integrator)) {
+      throw Error("--tolerance needs an adaptive integrator (bs32, verlet_adaptive), not --integrator " +
+                  *overrides.integrator);
     }
     scene.tolerance = *overrides.tolerance;
-    scene.integrator = Integrator::BogackiShampine;
+    if (!isAdaptive(scene.integrator)) scene.integrator = kDefaultAdaptive;
   }
   if (overrides.dt) {
     if (!(*overrides.dt > 0.0) || !std::isfinite(*overrides.dt)) throw Error("--dt must be a positive finite number of seconds");
@@ -145,7 +146,7 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     }
     scene.substeps = *overrides.substeps;
   }
-  if (advise && scene.integrator != Integrator::BogackiShampine) {  // the adaptive step needs no advice
+  if (advise && !isAdaptive(scene.integrator)) {  // the adaptive step needs no advice
     const StepChoice choice = overrides.autoSubsteps ? StepChoice::AutoSubsteps
                               : !scene.stepGiven && !overrides.dt && !overrides.substeps ? StepChoice::Default
                                                                                          : StepChoice::Warn;

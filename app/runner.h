@@ -15,7 +15,7 @@ namespace springy {
 struct RunOverrides {
   std::optional<std::string> integrator;
   std::optional<double> dt, duration;
-  std::optional<double> tolerance;  // --tolerance: the adaptive integrator (bs32) at this tolerance
+  std::optional<double> tolerance;  // --tolerance: an adaptive integrator at this tolerance
   std::optional<int> substeps;
   bool autoSubsteps = false;  // --substeps auto: the stability advisor picks them
   std::optional<unsigned> threads;  // --threads (default: SPRINGY_THREADS, else every core)

@@ -468,7 +468,7 @@ int runAccuracy(const StudyOptions& o) {
 // Through contact: whole runs of scenes, error against a fine reference (sim/trajectory.h).
 
 struct ContactPoint {
-  std::string method;  // an integrator's name, or "bs32"
+  std::string method;  // the integrator's name
   double dt = 0, tolerance = 0;
   RunPath path;
   PathError error;
@@ -516,6 +516,7 @@ int runContact(const StudyOptions& o) {
       o.quick ? std::vector<double>{1e-3, 1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6};
   constexpr Integrator kFixed[] = {Integrator::SymplecticEuler, Integrator::VelocityVerlet, Integrator::Leapfrog,
                                    Integrator::RK4};
+  constexpr Integrator kAdaptive[] = {Integrator::BogackiShampine, Integrator::AdaptiveVerlet};
   const bool haveGnuplot = std::system("command -v gnuplot > /dev/null 2>&1") == 0;
   std::ostringstream md, csv, body;
   csv << "scene,method,dt,tolerance,complete,centroid_rms,end_position,lowest_volume,wall_per_sim_second,evaluations,"
@@ -558,11 +559,16 @@ int runContact(const StudyOptions& o) {
         points.push_back(std::move(p));
       }
     }
-    for (double tolerance : tolerances) {
-      ContactPoint p{
-          "bs32", base.frame / n0, tolerance, run(Integrator::BogackiShampine, base.frame / n0, tolerance), {}};
-      if (p.path.complete) p.error = pathError(model, reference, p.path);
-      points.push_back(std::move(p));
+    for (Integrator adaptive : kAdaptive) {
+      for (double tolerance : tolerances) {
+        ContactPoint p{std::string(integratorName(adaptive)),
+                       base.frame / n0,
+                       tolerance,
+                       run(adaptive, base.frame / n0, tolerance),
+                       {}};
+        if (p.path.complete) p.error = pathError(model, reference, p.path);
+        points.push_back(std::move(p));
+      }
     }
     const auto perSecond = [&](const ContactPoint& p) { return p.path.wallSeconds / base.duration; };
     for (const ContactPoint& p : points) {
@@ -596,13 +602,14 @@ int runContact(const StudyOptions& o) {
       body << "\n";
     }
     body << "\nEach cell: centroid RMS error / wall time per simulated second (a failed run: what stopped it, and its "
-            "time "
-            "until then).\n\n"
-         << "| bs32 tolerance | centroid RMS | end position | lowest volume | wall per sim. s | steps (rejected) | "
-            "step from-to [s] | fixed step for the same error costs |\n|---|---|---|---|---|---|---|---|\n";
+            "time until then).\n\n"
+         << "| adaptive | tolerance | centroid RMS | end position | lowest volume | wall per sim. s | steps (rejected) "
+            "| "
+            "step from-to [s] | fixed step for the same error costs |\n|---|---|---|---|---|---|---|---|---|\n";
+    const auto isFixed = [](const ContactPoint& p) { return p.tolerance == 0.0; };
     for (const ContactPoint& p : points) {
-      if (p.method != "bs32") continue;
-      body << "| " << fmt("%.0e", p.tolerance) << " | ";
+      if (isFixed(p)) continue;
+      body << "| " << p.method << " | " << fmt("%.0e", p.tolerance) << " | ";
       if (!p.path.complete) {
         body << describeFailure(p.path) << " | | | " << fmt("%.3g", perSecond(p) * 1e3) << " ms | | | |\n";
         continue;
@@ -610,7 +617,7 @@ int runContact(const StudyOptions& o) {
       // The cheapest fixed-step run at least as accurate: how much longer it takes.
       const ContactPoint* rival = nullptr;
       for (const ContactPoint& q : points) {
-        if (q.method == "bs32" || !q.path.complete || q.error.centroidRms > p.error.centroidRms) continue;
+        if (!isFixed(q) || !q.path.complete || q.error.centroidRms > p.error.centroidRms) continue;
         if (!rival || perSecond(q) < perSecond(*rival)) rival = &q;
       }
       const StepStats& st = p.path.stepStats;
@@ -625,18 +632,16 @@ int runContact(const StudyOptions& o) {
     body << "\n";
     std::vector<PlotSeries> series;
     for (Integrator integrator : kFixed) series.push_back({std::string(integratorName(integrator)), {}});
-    series.push_back({"bs32 (adaptive)", {}});
+    for (Integrator integrator : kAdaptive) series.push_back({std::string(integratorName(integrator)), {}});
     for (const ContactPoint& p : points) {
       if (!p.path.complete || !(p.error.centroidRms > 0)) continue;
-      const bool adaptive = p.method == "bs32";
-      std::size_t index = series.size() - 1;
-      for (std::size_t i = 0; i + 1 < series.size(); ++i) {
-        if (series[i].name == p.method) index = i;
+      for (PlotSeries& line : series) {
+        if (line.name != p.method) continue;
+        line.points.push_back(
+            {isFixed(p) ? fmt("%.3g", p.dt) : fmt("%.0e", p.tolerance), perSecond(p), p.error.centroidRms});
       }
-      series[index].points.push_back(
-          {adaptive ? fmt("%.0e", p.tolerance) : fmt("%.3g", p.dt), perSecond(p), p.error.centroidRms});
     }
-    body << errorPlot(out, "accuracy-contact-" + name, name + " through contact (labels: dt; bs32: tolerance)",
+    body << errorPlot(out, "accuracy-contact-" + name, name + " through contact (labels: dt; adaptive: tolerance)",
                       "centroid RMS error / body size", series, haveGnuplot);
   }
   md << "# Accuracy through contact: whole runs\n\n"
@@ -649,7 +654,8 @@ int runContact(const StudyOptions& o) {
         "reference's, relative to its size (bounding-box diagonal at rest); the largest over bodies. Also the last "
         "frame's centroid distance and the lowest volume's relative difference.\n"
      << "- Fixed steps divide the frame (frame / (n0 2^k), n0 from the original's 2 ms), so every run is compared at "
-        "the same instants; the adaptive step (bs32: Bogacki-Shampine 3(2), `--tolerance`) lands on every frame.\n"
+        "the same instants; the adaptive steps (bs32: Bogacki-Shampine 3(2); verlet_adaptive: velocity Verlet with "
+        "its error from the change of acceleration; `--tolerance`) land on every frame.\n"
      << "- Reference: RK4 at an eighth of the finest step; its check, RK4 at a quarter, must differ from it far "
         "less than the errors reported (each scene names the difference).\n"
      << "- Order through contact: slope of log error against log dt over the three finest steps; contact "

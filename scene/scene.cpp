@@ -657,7 +657,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
     }
     if (r.has("tolerance")) {
       scene.tolerance = r.inRange("tolerance", scene.tolerance, 1e-12, 0.5);
-      scene.integrator = Integrator::BogackiShampine;  // a tolerance asks for the adaptive step
+      if (!isAdaptive(scene.integrator)) scene.integrator = kDefaultAdaptive;  // a tolerance asks for one
     }
     scene.restingSpeed = r.number("resting_speed", scene.restingSpeed);
     r.finish();
@@ -799,7 +799,7 @@ std::optional<std::string> runSettingsProblem(const SceneDesc& scene) {
     return text.str();
   }
   const double steps = scene.duration / stepSize(scene);
-  if (scene.integrator != Integrator::BogackiShampine && !(steps <= kMaxSteps)) {
+  if (!isAdaptive(scene.integrator) && !(steps <= kMaxSteps)) {
     text << "duration " << scene.duration << " s in steps of " << stepSize(scene) << " s (dt / substeps) is " << steps
          << " steps, more than the limit of " << kMaxSteps;
     return text.str();

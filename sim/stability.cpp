@@ -21,7 +21,8 @@ State stepMode(Integrator integrator, double w2, double g, double h, State s) {
       const double v = s.v + h * a(s.x, s.v);
       return {s.x + h * v, v};
     }
-    case Integrator::VelocityVerlet: {
+    case Integrator::VelocityVerlet:
+    case Integrator::AdaptiveVerlet: {
       const double a0 = a(s.x, s.v);
       const double x = s.x + h * s.v + 0.5 * h * h * a0;
       const double a1 = a(x, s.v + h * a0);

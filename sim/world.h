@@ -40,6 +40,7 @@ enum class Integrator {
   RK4,              // classical Runge-Kutta, forces at all four stages      order 4
   BackwardEuler,    // implicit: Newton + CG on M dv = h f(x + h v1, v1)     order 1 (sim/implicit.h)
   BogackiShampine,  // adaptive: embedded 3(2) pair, step chosen by a tolerance order 3, 3 evals/step
+  AdaptiveVerlet,   // adaptive: velocity Verlet, error from a1 - a0              order 2, 1 eval/step
 };
 
 // The adaptive integrator's step statistics (World::stepStats).
@@ -49,6 +50,11 @@ struct StepStats {
   double smallest = 0.0, largest = 0.0;  // accepted steps [s] (the smallest: not one shortened to land on a stop)
   uint64_t landed = 0;                   // accepted steps shortened to land on a stop
 };
+
+// The integrators that choose their own step by a tolerance (World::setTolerance), and the one
+// a tolerance alone selects.
+inline bool isAdaptive(Integrator i) { return i == Integrator::BogackiShampine || i == Integrator::AdaptiveVerlet; }
+constexpr Integrator kDefaultAdaptive = Integrator::AdaptiveVerlet;
 
 // Name used in scene files and on the command line ("explicit_euler", "rk4", ...).
 std::string_view integratorName(Integrator integrator);
@@ -89,7 +95,7 @@ class World {
   // safety factor 0.9. Contact between bodies is resolved after a step is accepted; the velocity
   // change it makes bounds the next step the same way. Every decision is a maximum over
   // vertices, so the step sequence is bit-identical on any thread count. dt() is the next step.
-  bool adaptive() const { return integrator_ == Integrator::BogackiShampine; }
+  bool adaptive() const { return isAdaptive(integrator_); }
   void setTolerance(double tolerance);
   double tolerance() const { return tolerance_; }
   const StepStats& stepStats() const { return stats_; }
@@ -180,6 +186,12 @@ class World {
   void stepRK4();
   void stepBackwardEuler();
   void stepBogackiShampine();
+  void stepAdaptiveVerlet();
+  // The adaptive steps' shared parts: the next step to try (false: none is long enough, the
+  // run must stop; stepProblem_ says why), and the verdict on a tried step from its embedded
+  // error and its impacts' (true: accepted and taken).
+  bool chooseStep(double& h, double& wanted);
+  bool judge(double h, double wanted, double embedded, bool afterRejection);
   // The adaptive step's error estimates, as fractions of the tolerance (<= 1: accepted).
   double impactError(double h) const;
   // Takes the candidate state (xn_, vn_) as the step's end, resolving the static colliders; the

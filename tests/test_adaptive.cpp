@@ -38,8 +38,9 @@ struct Oscillator {
 };
 
 // Runs the oscillator to `end` through stops every `frame` seconds; returns |x - exact| / length.
-double oscillatorError(double tolerance, double end, World* out = nullptr) {
-  World world(Oscillator::model(), Integrator::BogackiShampine, 1e-3);
+double oscillatorError(double tolerance, double end, World* out = nullptr,
+                       Integrator integrator = Integrator::BogackiShampine) {
+  World world(Oscillator::model(), integrator, 1e-3);
   world.setTolerance(tolerance);
   for (int f = 1; f <= static_cast<int>(std::lround(end / 0.1)); ++f) {
     const double stop = 0.1 * f;
@@ -65,6 +66,22 @@ TEST(Adaptive, ErrorOnADampedOscillatorFollowsTheTolerance) {
   EXPECT_LT(fine, middle / 20.0);
 }
 
+TEST(Adaptive, VerletErrorOnADampedOscillatorFollowsTheTolerance) {
+  // The same for verlet_adaptive, whose estimate h^2/6 |a1 - a0| is of its local position error.
+  // Measured: tolerance 1e-4 -> 6.7e-4, 1e-6 -> 3.1e-5, 1e-8 -> 8.0e-7 (a second-order method
+  // takes more steps for the same tolerance, so its local errors add up more: factors 21 and 39
+  // per hundredfold tolerance, against the third-order pair's 40 and 69).
+  const auto error = [](double tolerance) {
+    return oscillatorError(tolerance, 2.0, nullptr, Integrator::AdaptiveVerlet);
+  };
+  const double coarse = error(1e-4), middle = error(1e-6), fine = error(1e-8);
+  EXPECT_LT(coarse, 30 * 1e-4);
+  EXPECT_LT(middle, 60 * 1e-6);
+  EXPECT_LT(fine, 100 * 1e-8);
+  EXPECT_LT(middle, coarse / 15.0);
+  EXPECT_LT(fine, middle / 15.0);
+}
+
 TEST(Adaptive, TakesLongerStepsForALooserTolerance) {
   World loose(Oscillator::model(), Integrator::BogackiShampine, 1e-3);
   World tight(Oscillator::model(), Integrator::BogackiShampine, 1e-3);
@@ -78,9 +95,10 @@ TEST(Adaptive, TakesLongerStepsForALooserTolerance) {
 
 // A scene run with the adaptive step, frame by frame under the monitor.
 World runScene(const std::string& name, double tolerance, double duration, unsigned threads,
-               std::vector<std::pair<double, double>>* steps = nullptr) {
+               std::vector<std::pair<double, double>>* steps = nullptr,
+               Integrator integrator = Integrator::BogackiShampine) {
   const SceneDesc scene = loadScene(scenePath(name));
-  World world(buildModel(scene), Integrator::BogackiShampine, stepSize(scene));
+  World world(buildModel(scene), integrator, stepSize(scene));
   world.setTolerance(tolerance);
   world.setThreads(threads, 1);  // split even a small model, so that the threads really share it
   Monitor monitor(world);
@@ -129,10 +147,18 @@ TEST(Adaptive, StepSequenceIsBitIdenticalAcrossRunsAndThreadCounts) {
   // Plane contacts (spheres) and contact between bodies (head_on): every decision of the
   // controller is a maximum over vertices, which no split of the vertices changes.
   // The spheres land at 1.7 s; head_on's balls meet at 0.375 s.
-  for (const auto& [name, duration] : {std::pair<const char*, double>{"spheres", 2.0}, {"head_on", 0.5}}) {
-    const World one = runScene(name, 1e-4, duration, 1);
-    const World again = runScene(name, 1e-4, duration, 1);
-    const World three = runScene(name, 1e-4, duration, 3);
+  // verlet_adaptive keeps its acceleration across steps (and drops it at a contact): spheres too.
+  struct Case {
+    const char* name;
+    double duration;
+    Integrator integrator;
+  };
+  for (const auto& [name, duration, integrator] :
+       {Case{"spheres", 2.0, Integrator::BogackiShampine}, Case{"head_on", 0.5, Integrator::BogackiShampine},
+        Case{"spheres", 2.0, Integrator::AdaptiveVerlet}}) {
+    const World one = runScene(name, 1e-4, duration, 1, nullptr, integrator);
+    const World again = runScene(name, 1e-4, duration, 1, nullptr, integrator);
+    const World three = runScene(name, 1e-4, duration, 3, nullptr, integrator);
     if (std::string(name) == "spheres") {
       EXPECT_GT(one.stepStats().rejected, 0u) << "the comparison includes rejected steps";
     } else {

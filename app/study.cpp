@@ -29,8 +29,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr Integrator kAll[] = {Integrator::ExplicitEuler, Integrator::SymplecticEuler, Integrator::VelocityVerlet,
-                               Integrator::Leapfrog,      Integrator::RK4,             Integrator::BackwardEuler};
+constexpr Integrator kAll[] = {
+    Integrator::ExplicitEuler, Integrator::SymplecticEuler, Integrator::VelocityVerlet, Integrator::Leapfrog,
+    Integrator::RK4,           Integrator::BackwardEuler};
 
 double theoreticalOrder(Integrator i) {
   switch (i) {
@@ -77,8 +78,8 @@ struct AccuracyCase {
   Model model;
   std::vector<Vec3> x0;
   double endTime = 1.0;
-  std::vector<double> dts;  // the ladder, each half the one before
-  double size = 1.0;        // body size the error is relative to
+  std::vector<double> dts;                       // the ladder, each half the one before
+  double size = 1.0;                             // body size the error is relative to
   std::function<std::vector<Vec3>()> reference;  // positions at endTime
 };
 
@@ -86,7 +87,7 @@ struct Point {
   std::string caseName;
   Integrator integrator;
   double dt;
-  double error;        // RMS vertex error / size at endTime
+  double error;          // RMS vertex error / size at endTime
   double wallPerSecond;  // wall time per simulated second [s], median
   bool stable;
 };
@@ -146,8 +147,9 @@ AccuracyCase hingeAccuracy() {
   AccuracyCase c;
   StabilityCase h = hingeCase(0.5, 1.0, 0.5, 1.0);  // P_theta 0.5 s, struts 1 s
   c.name = "hinge";
-  c.description = "two triangles on one hinge (P_theta = 0.5 s, T_theta = 1 s, struts P = 1 s), released bent "
-                  "0.5 rad from rest; reference: RK4 at dt/16 of the finest step";
+  c.description =
+      "two triangles on one hinge (P_theta = 0.5 s, T_theta = 1 s, struts P = 1 s), released bent "
+      "0.5 rad from rest; reference: RK4 at dt/16 of the finest step";
   c.model = h.model;
   c.x0 = h.positions;
   c.endTime = 1.0;
@@ -163,8 +165,9 @@ AccuracyCase gasAccuracy() {
   // coupled to every other.
   AccuracyCase c;
   c.name = "gas";
-  c.description = "icosphere (162 vertices, radius 1 m, 1 kg), struts P = 0.4 s, T = 1 s, no hinges, gas P_V = "
-                  "0.2 s, released squashed to 0.8 from rest; reference: RK4 at dt/16 of the finest step";
+  c.description =
+      "icosphere (162 vertices, radius 1 m, 1 kg), struts P = 0.4 s, T = 1 s, no hinges, gas P_V = "
+      "0.2 s, released squashed to 0.8 from rest; reference: RK4 at dt/16 of the finest step";
   BodyDesc desc;
   desc.name = "balloon";
   desc.mesh = makeIcosphere(1.0, 2);
@@ -289,7 +292,8 @@ double measuredOrder(const std::vector<Point>& points, const std::string& name, 
   // The asymptotic range: the (up to) three finest qualifying steps.
   std::vector<const Point*> use;
   for (const Point& p : points) {
-    if (p.caseName != name || p.integrator != integrator || !p.stable || !(p.error < 0.05) || !(p.error > 1e-11)) continue;
+    if (p.caseName != name || p.integrator != integrator || !p.stable || !(p.error < 0.05) || !(p.error > 1e-11))
+      continue;
     use.push_back(&p);
   }
   std::sort(use.begin(), use.end(), [](const Point* a, const Point* b) { return a->dt < b->dt; });
@@ -381,8 +385,8 @@ int runAccuracy(const StudyOptions& o) {
   std::ostringstream csv;
   csv << "case,integrator,dt,error,wall_per_sim_second,stable\n";
   for (const Point& p : points) {
-    csv << p.caseName << "," << integratorName(p.integrator) << "," << fmt("%.9g", p.dt) << ","
-        << fmt("%.9g", p.error) << "," << fmt("%.6g", p.wallPerSecond) << "," << (p.stable ? 1 : 0) << "\n";
+    csv << p.caseName << "," << integratorName(p.integrator) << "," << fmt("%.9g", p.dt) << "," << fmt("%.9g", p.error)
+        << "," << fmt("%.6g", p.wallPerSecond) << "," << (p.stable ? 1 : 0) << "\n";
   }
   writeFile(out / "accuracy.csv", csv.str());
   std::ostringstream orders;
@@ -420,9 +424,8 @@ int runAccuracy(const StudyOptions& o) {
       const double order = measuredOrder(points, c.name, integrator, &used);
       orders << c.name << "," << integratorName(integrator) << "," << fmt("%.4f", order) << ","
              << theoreticalOrder(integrator) << "," << used << "\n";
-      md << "| " << integratorName(integrator) << " | "
-         << (std::isnan(order) ? std::string("n/a") : fmt("%.2f", order)) << " (" << theoreticalOrder(integrator)
-         << ") |";
+      md << "| " << integratorName(integrator) << " | " << (std::isnan(order) ? std::string("n/a") : fmt("%.2f", order))
+         << " (" << theoreticalOrder(integrator) << ") |";
       for (const Point& p : points) {
         if (p.caseName != c.name || p.integrator != integrator) continue;
         md << " " << (p.stable ? fmt("%.2e", p.error) : std::string("unstable")) << " / "
@@ -525,6 +528,29 @@ int runContact(const StudyOptions& o) {
   std::ostringstream md, csv, body;
   csv << "scene,method,dt,tolerance,complete,centroid_rms,end_position,lowest_volume,wall_per_sim_second,evaluations,"
          "steps,rejected\n";
+  md << "# Accuracy through contact: whole runs\n\n"
+     << "Generated by `springy study contact" << (o.quick ? " --quick" : "")
+     << (o.maxDuration > 0 ? " --max-duration " + fmt("%g", o.maxDuration) : std::string()) << " -o " << o.output
+     << "` (scripts/study.sh regenerates docs/). Do not edit by hand.\n\n"
+     << "- Machine: " << machine() << "; one run per point.\n"
+     << "- Each scene runs with its colliders and contacts, from the start over the duration given, sampled at its "
+        "video frames. Error: per body, the RMS over frames of the distance between its centroid and the "
+        "reference's, relative to its size (bounding-box diagonal at rest); the largest over bodies. Also the last "
+        "frame's centroid distance and the lowest volume's relative difference.\n"
+     << "- Fixed steps divide the frame (frame / (n0 2^k), n0 from the original's 2 ms), so every run is compared at "
+        "the same instants; the adaptive steps (bs32: Bogacki-Shampine 3(2); verlet_adaptive: velocity Verlet with "
+        "its error from the change of acceleration; `--tolerance`) land on every frame.\n"
+     << "- Reference: RK4 at an eighth of the finest step; its check, RK4 at a quarter, must differ from it far "
+        "less than the errors reported (each scene names the difference).\n"
+     << "- Order through contact: slope of log error against log dt over the three finest steps; contact "
+        "resolved at the end of each step makes every method about first order.\n"
+     << "- The last column: the cheapest fixed-step run of the ladder whose error is no larger, and its wall time "
+        "over the adaptive run's (above 1: the adaptive step is cheaper for that accuracy).\n\n";
+  // Written again after every scene: a long study shows what it has so far.
+  const auto writeAll = [&] {
+    writeFile(out / "accuracy-contact.csv", csv.str());
+    writeFile(out / "accuracy-contact.md", md.str() + body.str());
+  };
   for (const std::string& path : scenes) {
     const SceneDesc scene = loadScene(path);
     const Model model = buildModel(scene);
@@ -647,28 +673,9 @@ int runContact(const StudyOptions& o) {
     }
     body << errorPlot(out, "accuracy-contact-" + name, name + " through contact (labels: dt; adaptive: tolerance)",
                       "centroid RMS error / body size", series, haveGnuplot);
+    writeAll();
   }
-  md << "# Accuracy through contact: whole runs\n\n"
-     << "Generated by `springy study contact" << (o.quick ? " --quick" : "")
-     << (o.maxDuration > 0 ? " --max-duration " + fmt("%g", o.maxDuration) : std::string()) << " -o " << o.output
-     << "` (scripts/study.sh regenerates docs/). Do not edit by hand.\n\n"
-     << "- Machine: " << machine() << "; one run per point.\n"
-     << "- Each scene runs with its colliders and contacts, from the start over the duration given, sampled at its "
-        "video frames. Error: per body, the RMS over frames of the distance between its centroid and the "
-        "reference's, relative to its size (bounding-box diagonal at rest); the largest over bodies. Also the last "
-        "frame's centroid distance and the lowest volume's relative difference.\n"
-     << "- Fixed steps divide the frame (frame / (n0 2^k), n0 from the original's 2 ms), so every run is compared at "
-        "the same instants; the adaptive steps (bs32: Bogacki-Shampine 3(2); verlet_adaptive: velocity Verlet with "
-        "its error from the change of acceleration; `--tolerance`) land on every frame.\n"
-     << "- Reference: RK4 at an eighth of the finest step; its check, RK4 at a quarter, must differ from it far "
-        "less than the errors reported (each scene names the difference).\n"
-     << "- Order through contact: slope of log error against log dt over the three finest steps; contact "
-        "resolved at the end of each step makes every method about first order.\n"
-     << "- The last column: the cheapest fixed-step run of the ladder whose error is no larger, and its wall time "
-        "over the adaptive run's (above 1: the adaptive step is cheaper for that accuracy).\n\n"
-     << body.str();
-  writeFile(out / "accuracy-contact.csv", csv.str());
-  writeFile(out / "accuracy-contact.md", md.str());
+  writeAll();
   std::printf("wrote %s\n", (out / "accuracy-contact.md").string().c_str());
   return 0;
 }
@@ -687,8 +694,11 @@ int runStability(const StudyOptions& o) {
      << "Generated by `springy study stability" << (o.quick ? " --quick" : "") << " -o " << o.output
      << "` (scripts/study.sh regenerates docs/). Do not edit by hand.\n\n"
      << "- Machine: " << machine() << ".\n"
-     << "- Largest stable dt: bisection in log dt (" << iterations << " halvings of the bracket's log ratio after "
-        "bracketing by factors of 4); stable = over " << horizon << " simulated s every position and velocity "
+     << "- Largest stable dt: bisection in log dt (" << iterations
+     << " halvings of the bracket's log ratio after "
+        "bracketing by factors of 4); stable = over "
+     << horizon
+     << " simulated s every position and velocity "
         "finite, the body never larger than 10x its rest size, total energy never more than its own scale above "
         "the start (the stability monitor, energy tolerance 100 %). Capped at 0.1 s.\n"
      << "- Bound: 2/omega_max with omega_max the Gershgorin bound of the mass-normalised stiffness at t = 0 "
@@ -715,8 +725,8 @@ int runStability(const StudyOptions& o) {
       const double guess = std::isfinite(pred.dtMax) ? pred.dtMax : 0.01;
       const MeasuredStep m = largestStableStep(c.model, integrator, horizon, guess, 0.1, &c.positions, iterations);
       std::string failed = m.capped ? "none up to 0.1 s" : m.above.kind;
-      csv << c.name << "," << integratorName(integrator) << "," << fmt("%.4g", m.dt) << "," << (m.capped ? 1 : 0)
-          << "," << fmt("%.4g", pred.dtMax) << "," << fmt("%.4g", bound) << "," << fmt("%.4g", b.omegaMax) << ","
+      csv << c.name << "," << integratorName(integrator) << "," << fmt("%.4g", m.dt) << "," << (m.capped ? 1 : 0) << ","
+          << fmt("%.4g", pred.dtMax) << "," << fmt("%.4g", bound) << "," << fmt("%.4g", b.omegaMax) << ","
           << fmt("%.4g", b.gammaMax) << "," << failed << "\n";
       md << "| " << c.name << " | " << integratorName(integrator) << " | " << (m.capped ? ">= " : "")
          << fmt("%.3g", m.dt) << " s | "
@@ -726,7 +736,8 @@ int runStability(const StudyOptions& o) {
          << failed << " |\n";
     }
   }
-  md << "\n## Cases\n\n" << descriptions.str() << refused.str()
+  md << "\n## Cases\n\n"
+     << descriptions.str() << refused.str()
      << "\n## The guarantee\n\nNo case produces a NaN silently: each either runs, or stops with the monitor's "
         "report naming the body, the step and what diverged, or is refused at load because its geometry is "
         "degenerate (tests/test_stability.cpp, `Guarantee.*`). Backward Euler runs every case at dt = 1/60 s; its "

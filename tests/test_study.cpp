@@ -10,9 +10,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -64,6 +66,45 @@ TEST(StudyAccuracy, MeasuredOrdersMatchTheoryWithinTwoTenths) {
     EXPECT_GT(fs::file_size(dir / "accuracy-strut.png"), 1000u);
     EXPECT_NE(text.find("](accuracy-strut.png)"), std::string::npos);
   }
+  fs::remove_all(dir);
+}
+
+TEST(StudyContact, ErrorsThroughContactFallWithTheStepAndTheTolerance) {
+  // The cube's first 2 s (it lands at 1 s), every fixed-step integrator at 2, 1 and 0.5 ms and
+  // both adaptive ones at 1e-3 and 1e-4, against RK4 at 61 us.
+  const fs::path dir = tempDir("contact");
+  const Result r = run("study contact --quick --max-duration 2 --scenes " + std::string(SPRINGY_SOURCE_DIR) +
+                       "/scenes/cube.toml -o " + dir.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream in(dir / "accuracy-contact.csv");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line.rfind("scene,method,dt,tolerance,complete,centroid_rms,", 0), 0u) << line;
+  std::map<std::string, std::vector<std::array<double, 2>>> rows;  // method -> (error, evaluations)
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::stringstream s(line);
+    for (std::string field; std::getline(s, field, ',');) f.push_back(field);
+    ASSERT_EQ(f.size(), 12u) << line;
+    EXPECT_EQ(f[4], "1") << "every run completes: " << line;
+    rows[f[1]].push_back({std::stod(f[5]), std::stod(f[9])});
+  }
+  ASSERT_EQ(rows.size(), 6u);
+  // Symplectic Euler is first order through the landing: halving the step halves the error.
+  const auto& euler = rows["symplectic_euler"];
+  ASSERT_EQ(euler.size(), 3u);
+  for (int k = 0; k < 2; ++k) EXPECT_NEAR(euler[k][0] / euler[k + 1][0], 2.0, 0.5);
+  // A tenfold tolerance buys a smaller error for more evaluations.
+  for (const char* adaptive : {"bs32", "verlet_adaptive"}) {
+    const auto& a = rows[adaptive];
+    ASSERT_EQ(a.size(), 2u) << adaptive;
+    EXPECT_LT(a[1][0], a[0][0] / 3) << adaptive;
+    EXPECT_GT(a[1][1], a[0][1]) << adaptive;
+  }
+  std::ifstream md(dir / "accuracy-contact.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("RK4 at twice that step differs from it by"), std::string::npos);
+  EXPECT_NE(text.find("| verlet_adaptive | 1e-04 |"), std::string::npos);
   fs::remove_all(dir);
 }
 

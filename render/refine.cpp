@@ -80,7 +80,8 @@ void PnRefinement::evaluate(std::span<const glm::vec3> P, std::span<const glm::v
   // edge's curve still depends on its two vertices alone: no cracks either way. Every corner of a
   // triangle at a flat vertex is made flat too: a free neighbour's patch would bulge toward the
   // wall the flat vertex rests on (seen: ball colours dotting the outside of the stack's tray).
-  std::vector<std::uint8_t> flatter;
+  std::vector<std::uint8_t>& flatter = flatter_;
+  flatter.clear();
   if (!flat.empty()) {
     flatter.assign(flat.begin(), flat.end());
     for (std::size_t t = 0; t + 2 < coarse_.size(); t += 3) {

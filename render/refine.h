@@ -45,6 +45,9 @@ class PnRefinement {
   std::vector<std::uint32_t> coarse_;                // 3 per coarse triangle
   std::vector<std::array<std::uint32_t, 2>> edges_;  // a < b
   std::vector<std::uint32_t> triangles_;             // refined
+  // evaluate's scratch (the vertices kept flat), kept between frames: not allocated per frame.
+  // evaluate is const but not for concurrent use on one object.
+  mutable std::vector<std::uint8_t> flatter_;
 };
 
 }  // namespace springy::render

@@ -443,11 +443,11 @@ void World::stepAdaptiveVerlet() {
       cachedAccelerationValid_ = true;
       if (judge(h, wanted, embedded, rejected)) return;
       std::swap(k1v_, k2v_);  // rejected for an impact: a0 is still the step's
-      cachedAccelerationValid_ = false;
       a0 = k1v_.data();
       a1 = k2v_.data();
       continue;
     }
+    cachedAccelerationValid_ = false;  // a NaN step is taken as it is; a rejected one keeps a0
     if (judge(h, wanted, embedded, rejected)) return;
   }
 }

@@ -166,6 +166,18 @@ TriMesh makeOctahedronSphere(double radius, int n) {
   return m;
 }
 
+namespace {
+// The side of a body of revolution between segment k and k + 1: two triangles per pair of
+// neighbouring rings, ring(r, k) the vertex of ring r at segment k (k wraps).
+template <class Ring>
+void addSideColumn(TriMesh& m, const Ring& ring, int rings, int k) {
+  for (int r = 0; r + 1 < rings; ++r) {
+    m.triangles.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
+    m.triangles.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
+  }
+}
+}  // namespace
+
 TriMesh makeJelly(double radius, double height, int ridges, int rings, int segments) {
   assert(rings >= 2 && segments >= 3);
   // Profile: radius as a function of height fraction s in [0, 1] (0 = base, 1 = top centre).
@@ -203,10 +215,7 @@ TriMesh makeJelly(double radius, double height, int ridges, int rings, int segme
   auto ring = [&](int r, int k) { return 1u + u32(static_cast<std::size_t>(r * segments + (k % segments))); };
   for (int k = 0; k < segments; ++k) {
     m.triangles.push_back({bottomCentre, ring(0, k), ring(0, k + 1)});
-    for (int r = 0; r + 1 < rings; ++r) {
-      m.triangles.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
-      m.triangles.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
-    }
+    addSideColumn(m, ring, rings, k);
     m.triangles.push_back({ring(rings - 1, k), topCentre, ring(rings - 1, k + 1)});
   }
   orient(m);
@@ -283,10 +292,7 @@ TriMesh makeMould(double radius, double height, int lobes, int rings, int segmen
     m.triangles.push_back({0, innerAt(k), innerAt(k + 1)});
     m.triangles.push_back({innerAt(k), ring(0, k), ring(0, k + 1)});
     m.triangles.push_back({innerAt(k), ring(0, k + 1), innerAt(k + 1)});
-    for (int r = 0; r + 1 < rings; ++r) {
-      m.triangles.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
-      m.triangles.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
-    }
+    addSideColumn(m, ring, rings, k);
     m.triangles.push_back({ring(rings - 1, k), top, ring(rings - 1, k + 1)});
   }
   orient(m);

@@ -11,6 +11,7 @@
 #include "scene/scene.h"
 #include "sim/cases.h"
 #include "sim/diagnostics.h"
+#include "sim/error.h"
 #include "sim/monitor.h"
 #include "sim/stability.h"
 #include "sim/trajectory.h"
@@ -184,6 +185,22 @@ TEST(Adaptive, AModeNoStepAboveANanosecondCanHoldStopsWithAMessage) {
   EXPECT_EQ(world.time(), 0.0) << "no step taken";
   EXPECT_NE(world.stepProblem().find("stable only below"), std::string::npos) << world.stepProblem();
   EXPECT_NE(world.stepProblem().find("backward_euler"), std::string::npos) << world.stepProblem();
+}
+
+TEST(Adaptive, ASceneTolerancePicksTheAdaptiveStepAndABadOneIsNamed) {
+  const std::string body = "\n[[body]]\nshape = \"icosphere\"\nsubdivisions = 1\n";
+  const SceneDesc plain = parseScene("[scene]\ntolerance = 1e-3\n" + body, "t.toml");
+  EXPECT_EQ(plain.integrator, kDefaultAdaptive);
+  EXPECT_EQ(plain.tolerance, 1e-3);
+  const SceneDesc chosen = parseScene("[scene]\nintegrator = \"bs32\"\ntolerance = 1e-5\n" + body, "t.toml");
+  EXPECT_EQ(chosen.integrator, Integrator::BogackiShampine);
+  try {
+    parseScene("[scene]\ntolerance = 0.0\n" + body, "t.toml");
+    FAIL() << "a zero tolerance was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("t.toml:2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("tolerance"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -167,16 +167,10 @@ void World::step() {
     case Integrator::Leapfrog: stepLeapfrog(); break;
     case Integrator::RK4: stepRK4(); break;
     case Integrator::BackwardEuler: stepBackwardEuler(); break;
-    case Integrator::BogackiShampine:
-    case Integrator::AdaptiveVerlet:
-      if (integrator_ == Integrator::BogackiShampine) {
-        stepBogackiShampine();
-      } else {
-        stepAdaptiveVerlet();
-      }
-      if (!stepProblem_.empty()) return;  // no step taken
-      break;
+    case Integrator::BogackiShampine: stepBogackiShampine(); break;
+    case Integrator::AdaptiveVerlet: stepAdaptiveVerlet(); break;
   }
+  if (!stepProblem_.empty()) return;  // the adaptive step found no step it could take
   // Contact between and within bodies, over the whole step's paths.
   if (contacts_) {
     if (adaptive()) std::copy(v_.begin(), v_.end(), vBefore_.begin());

@@ -116,7 +116,7 @@ CommandLine::CommandLine() {
   studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")->capture_default_str();
   studyCmd
       ->add_option("--scenes", study.scenes,
-                   "Scenes for the accuracy and contact studies (default: the showcase scenes)")
+                   "Scenes for the accuracy and contact studies and the stability study's whole runs (default: the showcase scenes)")
       ->check(CLI::ExistingFile);
   studyCmd->add_flag("--quick", study.quick, "Small cases and few repeats (seconds; for tests and CI)");
   studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")

@@ -472,6 +472,17 @@ int runAccuracy(const StudyOptions& o) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The scenes a study names, or else the eight showcase scenes.
+std::vector<std::string> scenesOrShowcase(const StudyOptions& o) {
+  if (!o.scenes.empty()) return o.scenes;
+  std::vector<std::string> scenes;
+  for (const char* s : {"single_sphere", "spheres", "fixed_single_sphere", "cube", "ramp", "jelly", "bunny", "bunny_light"}) {
+    scenes.push_back((fs::path(SPRINGY_SCENES_DIR) / (std::string(s) + ".toml")).string());
+  }
+  return scenes;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Through contact: whole runs of scenes, error against a fine reference (sim/trajectory.h).
 
 struct ContactPoint {
@@ -509,13 +520,7 @@ double contactOrder(const std::vector<ContactPoint>& points, const std::string& 
 int runContact(const StudyOptions& o) {
   const fs::path out = o.output;
   makeOutputDirectory(out);
-  std::vector<std::string> scenes = o.scenes;
-  if (scenes.empty()) {
-    for (const char* s :
-         {"single_sphere", "spheres", "fixed_single_sphere", "cube", "ramp", "jelly", "bunny", "bunny_light"}) {
-      scenes.push_back((fs::path(SPRINGY_SCENES_DIR) / (std::string(s) + ".toml")).string());
-    }
-  }
+  const std::vector<std::string> scenes = scenesOrShowcase(o);
   // Fixed steps divide the frame (every run samples the same instants): the frame over n0 x 2^k
   // with n0 from the original's 2 ms step; the references 4 and 8 times finer than the finest.
   const int rungs = o.quick ? 3 : 5;
@@ -683,6 +688,74 @@ int runContact(const StudyOptions& o) {
 // ---------------------------------------------------------------------------------------------
 // Stability.
 
+// The showcase scenes (or the scenes named) over their full duration with their own integrator:
+// the smallest substep count that passes the whole run under the monitor (doubling from 1, then
+// bisection, each count a full run until the monitor stops it), against the advisor's count from
+// its estimate at rest and from the survey of the whole run (`--substeps auto`, sim/stability.h).
+std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
+  constexpr int kMost = 256;
+  std::ostringstream md;
+  md << "Each scene runs its full duration at its own integrator and dt, split into n substeps; passing = the "
+        "stability monitor (as `springy check`) sees nothing at any frame. Largest stable step: dt / n for the "
+        "smallest n that passes (n doubled from 1 until a run passes, then bisected; assumes a larger n passes "
+        "too). At rest: the advisor's count from its estimate at t = 0 (safety 0.9). Survey: `--substeps auto`, "
+        "the same estimate made every dt along a run with the default adaptive step, its smallest over the run. "
+        "The last column: the survey's step over the largest stable one (at most 1: it holds; at least 0.5: "
+        "within a factor 2; with n = 1 the largest stable step may exceed dt, which substeps cannot show).\n\n"
+     << "| scene | integrator | dt | largest stable step | at rest: substeps (step) | survey: substeps (step) | "
+        "survey, when and where | survey / largest | runs (wall) |\n"
+     << "|---|---|---|---|---|---|---|---|---|\n";
+  csv << "scene,integrator,dt,smallest_passing_substeps,rest_substeps,survey_substeps,survey_time,runs,wall_seconds\n";
+  for (const std::string& path : scenesOrShowcase(o)) {
+    const SceneDesc scene = loadScene(path);
+    const Model model = buildModel(scene);
+    const std::string name = fs::path(path).stem().string();
+    const auto start = std::chrono::steady_clock::now();
+    std::fprintf(stderr, "springy study stability: %s: survey...\n", name.c_str());
+    const StabilityReport rest = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
+    const StabilitySurvey survey =
+        surveyStability(model, scene.integrator, scene.duration, scene.dt, SimulationDesc{}.tolerance);
+    int runs = 0;
+    const auto passes = [&](int n) {
+      PathSettings s;
+      s.integrator = scene.integrator;
+      s.dt = scene.dt / n;
+      s.frame = 1.0 / scene.view.render.fps;
+      s.duration = scene.duration;
+      std::fprintf(stderr, "springy study stability: %s: %d substeps...\n", name.c_str(), n);
+      ++runs;
+      return tracePath(model, s).complete;
+    };
+    int hi = 1;
+    while (hi <= kMost && !passes(hi)) hi *= 2;
+    int smallest = hi;
+    if (hi <= kMost) {
+      int lo = hi / 2;  // failed (or 0 when 1 passed)
+      while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        (passes(mid) ? hi : lo) = mid;
+      }
+      smallest = hi;
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const int atRest = safeSubsteps(scene.dt, rest.dtMax, 0.9);
+    const int surveyed = safeSubsteps(scene.dt, survey.dtMax, 0.9);
+    const bool found = smallest <= kMost;
+    csv << name << "," << integratorName(scene.integrator) << "," << scene.dt << "," << (found ? smallest : 0) << ","
+        << atRest << "," << surveyed << "," << survey.time << "," << runs << "," << fmt("%.1f", wall) << "\n";
+    const auto step = [&](int n) { return std::to_string(n) + " (" + fmt("%.3g", scene.dt / n) + " s)"; };
+    md << "| " << name << " | " << integratorName(scene.integrator) << " | " << scene.dt << " s | "
+       << (found ? (smallest == 1 ? ">= " : "") + fmt("%.3g", scene.dt / smallest) + " s (n = " + std::to_string(smallest) + ")"
+                 : "below dt / " + std::to_string(kMost))
+       << " | " << step(atRest) << " | " << step(surveyed) << " | "
+       << (survey.failure.empty() ? "t = " + fmt("%.3g", survey.time) + " s, " + model.bodies[survey.body].name
+                                  : "survey failed: " + survey.failure)
+       << " | " << (found ? fmt("%.2f", static_cast<double>(smallest) / surveyed) : std::string("-")) << " | " << runs
+       << " (" << fmt("%.0f", wall) << " s) |\n";
+  }
+  return md.str();
+}
+
 int runStability(const StudyOptions& o) {
   const fs::path out = o.output;
   makeOutputDirectory(out);
@@ -707,7 +780,7 @@ int runStability(const StudyOptions& o) {
      << "- Failed first: what the monitor reported just above the limit (nan, blow-up, energy).\n\n";
   md << "| case | integrator | largest stable dt | predicted | 2/omega_max | measured / predicted | failed first |\n"
      << "|---|---|---|---|---|---|---|\n";
-  std::ostringstream refused, descriptions;
+  std::ostringstream refused, descriptions, csvRuns;
   for (const CaseFactory& factory : stabilityCases()) {
     StabilityCase c;
     try {
@@ -736,6 +809,9 @@ int runStability(const StudyOptions& o) {
          << failed << " |\n";
     }
   }
+  if (!o.quick || !o.scenes.empty()) {  // --quick without --scenes leaves out the showcase scenes' whole runs
+    md << "\n## Whole runs: the advisor through impacts\n\n" << wholeRuns(o, csvRuns);
+  }
   md << "\n## Cases\n\n"
      << descriptions.str() << refused.str()
      << "\n## The guarantee\n\nNo case produces a NaN silently: each either runs, or stops with the monitor's "
@@ -743,6 +819,7 @@ int runStability(const StudyOptions& o) {
         "degenerate (tests/test_stability.cpp, `Guarantee.*`). Backward Euler runs every case at dt = 1/60 s; its "
         "contacts are constraints inside the implicit solve (sim/implicit.h).\n";
   writeFile(out / "stability.csv", csv.str());
+  if (!csvRuns.str().empty()) writeFile(out / "stability-runs.csv", csvRuns.str());
   writeFile(out / "stability.md", md.str());
   std::printf("wrote %s\n", (out / "stability.md").string().c_str());
   return 0;

@@ -25,6 +25,12 @@ std::string seconds(double s) {
   return buf;
 }
 
+std::string number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", x);
+  return buf;
+}
+
 // Smallest factor f in [lo, hi] with stable(f) true, assuming stable(hi) and monotonicity.
 template <class F>
 double smallestStable(F stable, double lo, double hi) {
@@ -193,16 +199,23 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   }
   const int needed = safeSubsteps(scene.dt, r.dtMax, kSafety);
   if (choice == StepChoice::AutoSubsteps) {
-    // Never fewer than the scene's own: the estimate is made at rest, and a scene may need more
-    // for its impacts (bunny_light's 16: with 1 substep its bunny's landing gains energy).
-    const int own = scene.substeps;
-    scene.substeps = std::max(own, needed);
+    // The estimate at rest does not hold through impacts (bunny_light: 1 substep at rest, and its
+    // landing then gains energy): survey the whole run (sim/stability.h) and take its tightest limit.
+    log << "springy: " << path << ": surveying the run for --substeps auto (" << integratorName(kDefaultAdaptive)
+        << ", the stable limit estimated every " << seconds(scene.dt) << ")...\n"
+        << std::flush;
+    const StabilitySurvey survey =
+        surveyStability(model, scene.integrator, scene.duration, scene.dt, scene.tolerance, defaultThreadCount());
+    if (!survey.failure.empty()) {
+      throw Error(path + ": --substeps auto: the survey run (" + std::string(integratorName(kDefaultAdaptive)) +
+                  ", tolerance " + number(scene.tolerance) + ") failed, so no step can be advised: " +
+                  survey.failure);
+    }
+    scene.substeps = safeSubsteps(scene.dt, survey.dtMax, kSafety);
     log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
-        << ", estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator) << ", body '"
-        << body << "'" << (own >= needed ? "; the scene's own count, which is at least the estimate's " +
-                                                std::to_string(needed)
-                                          : std::string())
-        << ")\n";
+        << "; estimated stable limit for " << integratorName(scene.integrator) << " over the whole run "
+        << seconds(survey.dtMax) << ", at t = " << number(survey.time) << " s in body '"
+        << model.bodies[survey.body].name << "'; at rest " << seconds(survey.atRest) << ")\n";
   } else if (choice == StepChoice::Default) {
     const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);

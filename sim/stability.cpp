@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "sim/hinge.h"
+#include "sim/monitor.h"
 
 namespace springy {
 namespace {
@@ -201,6 +202,39 @@ StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x
     report.bodies.push_back(s);
   }
   return report;
+}
+
+StabilitySurvey surveyStability(const Model& model, Integrator integrator, double duration, double interval,
+                                double tolerance, unsigned threads) {
+  StabilitySurvey survey;
+  World world(model, kDefaultAdaptive, interval);
+  world.setTolerance(tolerance);
+  world.setThreads(threads);
+  Monitor monitor(world);
+  const auto estimate = [&] {
+    const StabilityReport r = estimateStability(model, world.positions(), integrator, duration);
+    ++survey.estimates;
+    if (survey.estimates == 1) survey.atRest = r.dtMax;
+    if (r.dtMax < survey.dtMax) {
+      survey.dtMax = r.dtMax;
+      survey.time = world.time();
+      survey.body = r.limitingBody;
+    }
+  };
+  estimate();
+  const auto intervals = static_cast<long>(std::ceil(duration / interval - 1e-9));
+  for (long i = 1; i <= intervals && survey.failure.empty(); ++i) {
+    const double until = std::min(duration, static_cast<double>(i) * interval);
+    while (!world.reached(until) && world.stepProblem().empty()) world.stepToward(until);
+    if (!world.stepProblem().empty()) {
+      survey.failure = world.stepProblem();
+    } else if (const auto failure = monitor.check(world)) {
+      survey.failure = failure->message;
+    } else {
+      estimate();
+    }
+  }
+  return survey;
 }
 
 int safeSubsteps(double dt, double dtMax, double safety) {

@@ -22,6 +22,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "sim/model.h"
@@ -79,6 +80,23 @@ BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integr
 // The estimate for every body of a model at positions x (its state at t = 0, usually).
 StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x, Integrator integrator,
                                   double horizon);
+
+// The advisor through a whole run (a survey): the estimate above holds at the shape it is made
+// at, and an impact compresses a body, which stiffens it (a strut's transverse stiffness grows
+// as |1 - l0/l|, a hinge's as its triangles flatten). The survey runs the model over `duration`
+// with the default adaptive step (its own step chosen by tolerance and kept under the same
+// bound, so the survey needs no step of its own) and makes the estimate for `integrator` again
+// every `interval` of simulated time; the smallest is the run's limit.
+struct StabilitySurvey {
+  double dtMax = std::numeric_limits<double>::infinity();  // smallest over the run [s]
+  double atRest = std::numeric_limits<double>::infinity(); // the estimate at t = 0 [s]
+  double time = 0.0;                                        // when the smallest was seen [s]
+  uint32_t body = 0;                                        // and in which body
+  uint32_t estimates = 0;
+  std::string failure;  // non-empty if the survey run itself failed (the limit then covers the run up to it)
+};
+StabilitySurvey surveyStability(const Model& model, Integrator integrator, double duration, double interval,
+                                double tolerance, unsigned threads = 1);
 
 // Substeps that bring dt below safety * dtMax (at least 1).
 int safeSubsteps(double dt, double dtMax, double safety = 0.9);

@@ -316,18 +316,22 @@ TEST_F(BadCommandLine, CheckNeverWritesItsTraceOverTheScene) {
   EXPECT_EQ(files(), std::vector<std::string>{"scene.toml"});
 }
 
-// Reproduction 7: --substeps auto picked 1 substep for bunny_light, whose impacts need its own 16.
-TEST_F(BadCommandLine, SubstepsAutoNeverLowersTheScenesOwnCount) {
+// Reproduction 7: --substeps auto picked 1 substep for bunny_light, whose impacts need more (the
+// estimate at rest). It now surveys the whole run (tests/test_study.cpp, Advice.SubstepsAutoHolds...)
+// and its count replaces the scene's own both ways: fewer for a soft body, more for a stiff one.
+TEST_F(BadCommandLine, SubstepsAutoReplacesTheScenesOwnCount) {
   const std::string s = scene("shape = \"icosphere\"\nsubdivisions = 1\nstrut_period = 0.1", "dt = 0.004\nsubsteps = 7");
   CommandResult r = runSpringy("check " + s + " --substeps auto --duration 0.1");
   EXPECT_EQ(r.status, 0) << r.output;
-  EXPECT_HAS(r.output, "--substeps auto: 7 (step 0.0005714 s");
-  EXPECT_HAS(r.output, "(7 substeps)");
-  // A stiffer body whose estimate asks for more than the scene's count gets more.
+  std::size_t at = r.output.find("--substeps auto: ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const int soft = std::stoi(r.output.substr(at + 17));
+  EXPECT_LT(soft, 7) << r.output;
+  EXPECT_HAS(r.output, "(" + std::to_string(soft) + " substeps)");
   const std::string stiff = scene("shape = \"icosphere\"\nsubdivisions = 1\nstrut_period = 0.002", "dt = 0.004\nsubsteps = 2");
   r = runSpringy("check " + stiff + " --substeps auto --duration 0.1");
   EXPECT_EQ(r.status, 0) << r.output;
-  const std::size_t at = r.output.find("--substeps auto: ");
+  at = r.output.find("--substeps auto: ");
   ASSERT_NE(at, std::string::npos) << r.output;
   EXPECT_GT(std::stoi(r.output.substr(at + 17)), 2) << r.output;
 }

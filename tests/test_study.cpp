@@ -122,6 +122,26 @@ TEST(Advice, SubstepsAutoMakesTheUnstableSceneRun) {
   EXPECT_EQ(r.output.find("exceeds the estimated"), std::string::npos) << r.output;
 }
 
+// Reproduction of issue 21: the estimate at rest gives bunny_light 1 substep, and its landing
+// (about 1.7 s) then gains energy. `--substeps auto` surveys the whole run: its count passes, and it
+// is above every count that fails.
+TEST(Advice, SubstepsAutoHoldsThroughTheBunnysLanding) {
+  const std::string scene = std::string(SPRINGY_SOURCE_DIR) + "/scenes/bunny_light.toml";
+  const std::string common = "check " + scene + " --duration 2.5 --threads 1 --substeps ";
+  const Result r = run(common + "auto");
+  EXPECT_EQ(r.status, 0) << r.output;
+  const std::size_t at = r.output.find("--substeps auto: ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const int n = std::stoi(r.output.substr(at + 17));
+  EXPECT_NE(r.output.find("over the whole run"), std::string::npos) << r.output;
+  for (const int fewer : {1, 3}) {
+    const Result f = run(common + std::to_string(fewer));
+    EXPECT_EQ(f.status, 1) << fewer << " substeps: " << f.output;
+    EXPECT_NE(f.output.find("total energy rose"), std::string::npos) << f.output;
+    EXPECT_GT(n, fewer);
+  }
+}
+
 TEST(Advice, SubstepsRejectsWhatIsNeitherANumberNorAuto) {
   const Result r = run("check " + kUnstable + " --substeps lots");
   EXPECT_NE(r.status, 0);

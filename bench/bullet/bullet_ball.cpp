@@ -4,9 +4,11 @@
 // Bullet btSoftBody (links on the mesh edges + Bullet's bending constraints, i.e. more links
 // between the vertices --bending D edges apart), dropped with its lowest point 1.5 m
 // above a static ground plane (btStaticPlaneShape, y = 0), gravity 9.81, simulated 2 s.
-// Pressure and volume conservation are OFF (kPR = kVC = 0) and pose matching is off
+// By default pressure and volume conservation are OFF (kPR = kVC = 0) and pose matching is off
 // (kMT = 0): the ball keeps its volume with its links alone, as springy's with its struts and
-// hinges.
+// hinges. --kpr K turns on Bullet's pressure model (btSoftBody::Config::kPR, its pressure
+// coefficient: a force on every face along its normal, in proportion to kPR and the face's area
+// over the enclosed volume), the counterpart of springy's enclosed gas (bench/drop_2562_gas.toml).
 //
 // The step dt and the position-solver iteration count (piterations) come from the command
 // line. Every step the enclosed volume (signed volume of the closed triangle mesh, divergence
@@ -17,8 +19,8 @@
 // or the ball grew past 10x its size.
 //
 //   bullet_ball --dt 0.004 --piterations 10 [--duration 2] [--klst 1] [--bend-klst 1]
-//               [--bending 2] [--kdp 0] [--margin 0.01] [--min-volume 0.95] [--max-penetration 0.05]
-//               [--quiet]
+//               [--bending 2] [--kdp 0] [--kpr 0] [--margin 0.01] [--min-volume 0.95]
+//               [--max-penetration 0.05] [--quiet]
 //
 // Output: a few human-readable lines, then one `result` line of key=value pairs (for scripts).
 #include <btBulletDynamicsCommon.h>
@@ -158,6 +160,7 @@ struct Options {
   double bendKlst = 1.0;  // bending links' linear stiffness [0, 1]
   int bending = 2;        // generateBendingConstraints distance (0: no bending links)
   double kdp = 0.0;       // velocity damping [0, 1]
+  double kpr = 0.0;       // pressure coefficient (0: no pressure)
   double kdf = 0.3;       // dynamic friction against the ground (springy's plane: 0.3)
   double margin = 0.01;   // collision margin [m] (Bullet's soft-body default is 0.25 m)
   double minVolume = 0.95;
@@ -169,7 +172,7 @@ struct Options {
 [[noreturn]] void usage(const char* argv0) {
   std::fprintf(stderr,
                "usage: %s [--dt S] [--piterations N] [--duration S] [--klst K] [--bend-klst K] [--bending D]\n"
-               "          [--kdp K] [--kdf K] [--margin M] [--min-volume F] [--max-penetration M]\n"
+               "          [--kdp K] [--kpr K] [--kdf K] [--margin M] [--min-volume F] [--max-penetration M]\n"
                "          [--bullet-bending] [--quiet]\n",
                argv0);
   std::exit(2);
@@ -198,6 +201,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--bending") o.bending = static_cast<int>(number());
     else if (a == "--kdp") o.kdp = number();
     else if (a == "--kdf") o.kdf = number();
+    else if (a == "--kpr") o.kpr = number();
     else if (a == "--margin") o.margin = number();
     else if (a == "--min-volume") o.minVolume = number();
     else if (a == "--max-penetration") o.maxPenetration = number();
@@ -281,7 +285,7 @@ int main(int argc, char** argv) {
   cfg.piterations = opt.piterations;
   cfg.viterations = 0;
   cfg.diterations = 0;
-  cfg.kPR = 0;  // no pressure
+  cfg.kPR = static_cast<btScalar>(opt.kpr);  // 0: no pressure
   cfg.kVC = 0;  // no volume conservation
   cfg.kMT = 0;  // no pose matching
   cfg.kDP = static_cast<btScalar>(opt.kdp);
@@ -301,9 +305,9 @@ int main(int argc, char** argv) {
     std::printf("bullet_ball: Bullet %d, btScalar %zu bytes; icosphere %d vertices, %d triangles, %d edge links + %d "
                 "bending links (distance %d)\n",
                 btGetVersion(), sizeof(btScalar), nVertices, nTriangles, edgeLinks, bendLinks, opt.bending);
-    std::printf("  dt %g s, %ld steps, piterations %d, kLST %g, bending kLST %g, kDP %g, kDF %g, margin %g m, rest "
-                "volume %.6f m^3 (sphere %.6f)\n",
-                opt.dt, steps, opt.piterations, opt.klst, opt.bendKlst, opt.kdp, opt.kdf, opt.margin, restVolume,
+    std::printf("  dt %g s, %ld steps, piterations %d, kLST %g, bending kLST %g, kDP %g, kPR %g, kDF %g, margin %g m, "
+                "rest volume %.6f m^3 (sphere %.6f)\n",
+                opt.dt, steps, opt.piterations, opt.klst, opt.bendKlst, opt.kdp, opt.kpr, opt.kdf, opt.margin, restVolume,
                 4.0 / 3.0 * M_PI * radius * radius * radius);
     std::printf("  centre at y = %.6f m (lowest vertex %.6f m below it); setup %.3f s (not timed below)\n", centerY,
                 -minY, setupSeconds);
@@ -365,10 +369,10 @@ int main(int argc, char** argv) {
   }
   std::printf("result dt=%.9g piterations=%d steps=%ld vertices=%d min_volume=%.6f end_volume=%.6f max_volume=%.6f "
               "wall_s=%.6f step_s=%.6f ns_per_vertex_step=%.1f lowest_y=%.6f end_lowest_y=%.6f end_centroid_y=%.6f links=%d "
-              "setup_s=%.3f max_strain=%.6f status=%s\n",
+              "setup_s=%.3f max_strain=%.6f kpr=%g status=%s\n",
               opt.dt, opt.piterations, done, nVertices, minRatio, ratio, maxRatio, wall, stepSeconds, nsPerVertexStep,
               lowest, endLowest, static_cast<double>(centroid.y()), edgeLinks + bendLinks, setupSeconds,
-              maxStrain, failedStep > 0 ? "fail" : "ok");
+              maxStrain, opt.kpr, failedStep > 0 ? "fail" : "ok");
 
   world->removeSoftBody(body);
   delete body;

@@ -689,23 +689,27 @@ int runContact(const StudyOptions& o) {
 // Stability.
 
 // The showcase scenes (or the scenes named) over their full duration with their own integrator:
-// the smallest substep count that passes the whole run under the monitor (doubling from 1, then
-// bisection, each count a full run until the monitor stops it), against the advisor's count from
-// its estimate at rest and from the survey of the whole run (`--substeps auto`, sim/stability.h).
+// the largest fixed step that passes the whole run under `springy check`'s monitor (bracketed by
+// factors of 2 from the survey's proposal, then bisected in log step), against the advisor's
+// proposals from its estimate at rest and from the survey of the whole run (`--substeps auto`,
+// sim/stability.h).
 std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
-  constexpr int kMost = 256;
+  constexpr double kSafetyFraction = 0.9;  // the advisor's (app/suggest.cpp)
+  const int halvings = o.quick ? 3 : 5;
   std::ostringstream md;
-  md << "Each scene runs its full duration at its own integrator and dt, split into n substeps; passing = the "
-        "stability monitor (as `springy check`) sees nothing at any frame. Largest stable step: dt / n for the "
-        "smallest n that passes (n doubled from 1 until a run passes, then bisected; assumes a larger n passes "
-        "too). At rest: the advisor's count from its estimate at t = 0 (safety 0.9). Survey: `--substeps auto`, "
-        "the same estimate made every dt along a run with the default adaptive step, its smallest over the run. "
-        "The last column: the survey's step over the largest stable one (at most 1: it holds; at least 0.5: "
-        "within a factor 2; with n = 1 the largest stable step may exceed dt, which substeps cannot show).\n\n"
-     << "| scene | integrator | dt | largest stable step | at rest: substeps (step) | survey: substeps (step) | "
-        "survey, when and where | survey / largest | runs (wall) |\n"
+  md << "Each scene runs its full duration with its own integrator at a fixed step h; passing = the stability "
+        "monitor of `springy check` sees nothing at any frame. Largest stable step: bracketed by factors of 2 from "
+        "the survey's proposal, then "
+     << halvings
+     << " halvings of the bracket's log ratio (assumes every smaller step passes); capped at one frame. "
+        "Proposed: 0.9 of the advisor's limit, from its estimate at t = 0 (at rest) or from the survey "
+        "(`--substeps auto`: the same estimate made every dt along a run with the default adaptive step, its "
+        "smallest; the substeps it gives at the scene's dt in brackets). The ratios: a proposal over the largest "
+        "stable step (at most 1: it holds; at least 0.5: within a factor 2).\n\n"
+     << "| scene | integrator | largest stable step | at rest: proposed | / largest | survey: proposed (substeps) | "
+        "/ largest | survey's tightest: when, body | runs (wall) |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
-  csv << "scene,integrator,dt,smallest_passing_substeps,rest_substeps,survey_substeps,survey_time,runs,wall_seconds\n";
+  csv << "scene,integrator,largest_stable_step,capped,rest_step,survey_step,survey_substeps,survey_time,runs,wall_seconds\n";
   for (const std::string& path : scenesOrShowcase(o)) {
     const SceneDesc scene = loadScene(path);
     const Model model = buildModel(scene);
@@ -714,44 +718,50 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
     std::fprintf(stderr, "springy study stability: %s: survey...\n", name.c_str());
     const StabilityReport rest = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
     const StabilitySurvey survey =
-        surveyStability(model, scene.integrator, scene.duration, scene.dt, SimulationDesc{}.tolerance);
+        surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps, scene.dt,
+                        SimulationDesc{}.tolerance);
+    const double frame = 1.0 / scene.view.render.fps;
+    const double restStep = kSafetyFraction * rest.dtMax, surveyStep = kSafetyFraction * survey.dtMax;
     int runs = 0;
-    const auto passes = [&](int n) {
+    const auto passes = [&](double h) {
       PathSettings s;
       s.integrator = scene.integrator;
-      s.dt = scene.dt / n;
-      s.frame = 1.0 / scene.view.render.fps;
+      s.dt = h;
+      s.frame = frame;
       s.duration = scene.duration;
-      std::fprintf(stderr, "springy study stability: %s: %d substeps...\n", name.c_str(), n);
+      std::fprintf(stderr, "springy study stability: %s: step %.4g s...\n", name.c_str(), h);
       ++runs;
       return tracePath(model, s).complete;
     };
-    int hi = 1;
-    while (hi <= kMost && !passes(hi)) hi *= 2;
-    int smallest = hi;
-    if (hi <= kMost) {
-      int lo = hi / 2;  // failed (or 0 when 1 passed)
-      while (hi - lo > 1) {
-        const int mid = (lo + hi) / 2;
-        (passes(mid) ? hi : lo) = mid;
+    double lo = std::min(surveyStep, frame), hi = lo;
+    bool capped = false;
+    if (passes(lo)) {
+      for (hi = std::min(2 * lo, frame); !capped; hi = std::min(2 * lo, frame)) {
+        if (!passes(hi)) break;
+        lo = hi;
+        capped = lo >= frame;
       }
-      smallest = hi;
+    } else {
+      for (lo = hi / 2; !passes(lo) && lo > 1e-7; lo /= 2) hi = lo;
+    }
+    if (!capped) {
+      for (int i = 0; i < halvings; ++i) {
+        const double mid = std::sqrt(lo * hi);
+        (passes(mid) ? lo : hi) = mid;
+      }
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const int atRest = safeSubsteps(scene.dt, rest.dtMax, 0.9);
-    const int surveyed = safeSubsteps(scene.dt, survey.dtMax, 0.9);
-    const bool found = smallest <= kMost;
-    csv << name << "," << integratorName(scene.integrator) << "," << scene.dt << "," << (found ? smallest : 0) << ","
-        << atRest << "," << surveyed << "," << survey.time << "," << runs << "," << fmt("%.1f", wall) << "\n";
-    const auto step = [&](int n) { return std::to_string(n) + " (" + fmt("%.3g", scene.dt / n) + " s)"; };
-    md << "| " << name << " | " << integratorName(scene.integrator) << " | " << scene.dt << " s | "
-       << (found ? (smallest == 1 ? ">= " : "") + fmt("%.3g", scene.dt / smallest) + " s (n = " + std::to_string(smallest) + ")"
-                 : "below dt / " + std::to_string(kMost))
-       << " | " << step(atRest) << " | " << step(surveyed) << " | "
+    const int substeps = safeSubsteps(scene.dt, survey.dtMax, kSafetyFraction);
+    csv << name << "," << integratorName(scene.integrator) << "," << fmt("%.4g", lo) << "," << (capped ? 1 : 0) << ","
+        << fmt("%.4g", restStep) << "," << fmt("%.4g", surveyStep) << "," << substeps << "," << survey.time << ","
+        << runs << "," << fmt("%.1f", wall) << "\n";
+    const auto ratio = [&](double h) { return capped ? "<= " + fmt("%.2f", h / lo) : fmt("%.2f", h / lo); };
+    md << "| " << name << " | " << integratorName(scene.integrator) << " | " << (capped ? ">= " : "")
+       << fmt("%.3g", lo) << " s | " << fmt("%.3g", restStep) << " s | " << ratio(restStep) << " | "
+       << fmt("%.3g", surveyStep) << " s (" << substeps << ") | " << ratio(surveyStep) << " | "
        << (survey.failure.empty() ? "t = " + fmt("%.3g", survey.time) + " s, " + model.bodies[survey.body].name
                                   : "survey failed: " + survey.failure)
-       << " | " << (found ? fmt("%.2f", static_cast<double>(smallest) / surveyed) : std::string("-")) << " | " << runs
-       << " (" << fmt("%.0f", wall) << " s) |\n";
+       << " | " << runs << " (" << fmt("%.0f", wall) << " s) |\n";
   }
   return md.str();
 }
@@ -762,7 +772,7 @@ int runStability(const StudyOptions& o) {
   const double horizon = o.quick ? 0.05 : 0.2;
   const int iterations = o.quick ? 4 : 8;
   std::ostringstream csv, md;
-  csv << "case,integrator,measured_dt,capped,predicted_dt,two_over_omega,omega_max,gamma_max,failed_first\n";
+  csv << "case,integrator,measured_dt,capped,predicted_dt,two_over_omega,omega_max,gamma_max,mode_found_dt,failed_first\n";
   md << "# Stability on stiff and extreme cases\n\n"
      << "Generated by `springy study stability" << (o.quick ? " --quick" : "") << " -o " << o.output
      << "` (scripts/study.sh regenerates docs/). Do not edit by hand.\n\n"
@@ -777,9 +787,13 @@ int runStability(const StudyOptions& o) {
      << "- Bound: 2/omega_max with omega_max the Gershgorin bound of the mass-normalised stiffness at t = 0 "
         "(sim/stability.h); predicted: the advisor's limit for that integrator (damping included; for explicit "
         "Euler the step at which the stiffest mode's energy doubles over the horizon).\n"
+     << "- Mode found: the step from the stiffest mode itself (power iteration on the mass-normalised stiffness "
+        "and damping, sim/stability.h ModeEstimator; what `--substeps auto` uses along a run), the smaller of the "
+        "mode undamped and a mode as damped with no stiffness.\n"
      << "- Failed first: what the monitor reported just above the limit (nan, blow-up, energy).\n\n";
-  md << "| case | integrator | largest stable dt | predicted | 2/omega_max | measured / predicted | failed first |\n"
-     << "|---|---|---|---|---|---|---|\n";
+  md << "| case | integrator | largest stable dt | predicted | 2/omega_max | measured / predicted | mode found | "
+        "measured / found | failed first |\n"
+     << "|---|---|---|---|---|---|---|---|---|\n";
   std::ostringstream refused, descriptions, csvRuns;
   for (const CaseFactory& factory : stabilityCases()) {
     StabilityCase c;
@@ -798,15 +812,20 @@ int runStability(const StudyOptions& o) {
       const double guess = std::isfinite(pred.dtMax) ? pred.dtMax : 0.01;
       const MeasuredStep m = largestStableStep(c.model, integrator, horizon, guess, 0.1, &c.positions, iterations);
       std::string failed = m.capped ? "none up to 0.1 s" : m.above.kind;
+      const World world(c.model, integrator, guess);
+      ModeEstimator modes(world);
+      const double found = ModeEstimator::step(integrator, modes.estimate(c.positions, 60), horizon);
       csv << c.name << "," << integratorName(integrator) << "," << fmt("%.4g", m.dt) << "," << (m.capped ? 1 : 0) << ","
           << fmt("%.4g", pred.dtMax) << "," << fmt("%.4g", bound) << "," << fmt("%.4g", b.omegaMax) << ","
-          << fmt("%.4g", b.gammaMax) << "," << failed << "\n";
+          << fmt("%.4g", b.gammaMax) << "," << fmt("%.4g", found) << "," << failed << "\n";
       md << "| " << c.name << " | " << integratorName(integrator) << " | " << (m.capped ? ">= " : "")
          << fmt("%.3g", m.dt) << " s | "
          << (std::isfinite(pred.dtMax) ? fmt("%.3g", pred.dtMax) + " s" : std::string("unconditional")) << " | "
          << fmt("%.3g", bound) << " s | "
          << (std::isfinite(pred.dtMax) && !m.capped ? fmt("%.2f", m.dt / pred.dtMax) : std::string("-")) << " | "
-         << failed << " |\n";
+         << (std::isfinite(found) ? fmt("%.3g", found) + " s" : std::string("unconditional")) << " | "
+         << (std::isfinite(found) && !m.capped ? fmt("%.2f", m.dt / found) : std::string("-")) << " | " << failed
+         << " |\n";
     }
   }
   if (!o.quick || !o.scenes.empty()) {  // --quick without --scenes leaves out the showcase scenes' whole runs

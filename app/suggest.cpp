@@ -205,7 +205,8 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
         << ", the stable limit estimated every " << seconds(scene.dt) << ")...\n"
         << std::flush;
     const StabilitySurvey survey =
-        surveyStability(model, scene.integrator, scene.duration, scene.dt, scene.tolerance, defaultThreadCount());
+        surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps, scene.dt,
+                        scene.tolerance, defaultThreadCount());
     if (!survey.failure.empty()) {
       throw Error(path + ": --substeps auto: the survey run (" + std::string(integratorName(kDefaultAdaptive)) +
                   ", tolerance " + number(scene.tolerance) + ") failed, so no step can be advised: " +

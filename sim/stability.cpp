@@ -204,25 +204,128 @@ StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x
   return report;
 }
 
-StabilitySurvey surveyStability(const Model& model, Integrator integrator, double duration, double interval,
-                                double tolerance, unsigned threads) {
+ModeEstimator::ModeEstimator(const World& world) : world_(world) {
+  const Model& model = world.model();
+  const std::size_t n = model.invMass.size();
+  invSqrtMass_.resize(n);
+  stiff_.resize(n);
+  damped_.resize(n);
+  plus_.resize(n);
+  minus_.resize(n);
+  fPlus_.resize(n);
+  fMinus_.resize(n);
+  zero_.assign(n, Vec3{0, 0, 0});
+  double size = 0.0;
+  for (const BodyInfo& b : model.bodies) size = std::max(size, b.restSize);
+  epsilon_ = 1e-7 * (size > 0.0 ? size : 1.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    invSqrtMass_[i] = std::sqrt(model.invMass[i]);  // 0 for a pinned vertex: it never moves
+    // A start with a part along every mode (a fixed pseudo-random vector: deterministic).
+    const double k = static_cast<double>(i);
+    stiff_[i] = Vec3{std::sin(1.0 + 0.7 * k), std::cos(2.0 + 1.3 * k), std::sin(3.0 + 0.31 * k)} * invSqrtMass_[i];
+    damped_[i] = stiff_[i];
+  }
+}
+
+double ModeEstimator::iterate(const std::vector<Vec3>& x, bool damping, std::vector<Vec3>& u, int iterations) {
+  const std::size_t n = u.size();
+  const auto normalise = [&] {
+    double sum = 0.0;
+    for (const Vec3& p : u) sum += dot(p, p);
+    const double scale = sum > 0.0 ? 1.0 / std::sqrt(sum) : 0.0;
+    for (Vec3& p : u) p = p * scale;
+    return sum > 0.0;
+  };
+  if (!normalise()) return 0.0;  // every vertex pinned
+  double largest = 0.0, lambda = 0.0;
+  for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, length(u[i]) * invSqrtMass_[i]);
+  for (int it = 0; it < iterations; ++it) {
+    // y = M^-1/2 A M^-1/2 u with A = -df/dx (or -df/dv), u scaled so no vertex moves beyond epsilon.
+    const double e = epsilon_ / std::max(largest, 1e-300);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 d = u[i] * (invSqrtMass_[i] * e);
+      if (damping) {
+        plus_[i] = d;
+        minus_[i] = d * -1.0;
+      } else {
+        plus_[i] = x[i] + d;
+        minus_[i] = x[i] - d;
+      }
+    }
+    if (damping) {
+      world_.computeForces(x.data(), plus_.data(), 0.0, fPlus_.data());
+      world_.computeForces(x.data(), minus_.data(), 0.0, fMinus_.data());
+    } else {
+      world_.computeForces(plus_.data(), zero_.data(), 0.0, fPlus_.data());
+      world_.computeForces(minus_.data(), zero_.data(), 0.0, fMinus_.data());
+    }
+    double rayleigh = 0.0;
+    largest = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 y = (fMinus_[i] - fPlus_[i]) * (invSqrtMass_[i] / (2.0 * e));
+      rayleigh += dot(u[i], y);
+      u[i] = y;
+    }
+    lambda = rayleigh;
+    if (!normalise()) return 0.0;
+    for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, length(u[i]) * invSqrtMass_[i]);
+  }
+  return std::isfinite(lambda) ? std::max(lambda, 0.0) : std::numeric_limits<double>::infinity();
+}
+
+ModeEstimator::Rates ModeEstimator::estimate(const std::vector<Vec3>& x, int iterations) {
+  Rates r;
+  r.omega = std::sqrt(iterate(x, false, stiff_, iterations));
+  r.gamma = iterate(x, true, damped_, iterations);
+  // The body with the largest share of the stiff mode.
+  const Model& model = world_.model();
+  double best = -1.0;
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    double share = 0.0;
+    for (uint32_t k = 0; k < model.bodies[b].vertexCount; ++k) {
+      const Vec3& p = stiff_[model.bodies[b].firstVertex + k];
+      share += dot(p, p);
+    }
+    if (share > best) best = share, r.body = b;
+  }
+  return r;
+}
+
+double ModeEstimator::step(Integrator integrator, const Rates& rates, double horizon) {
+  constexpr double kShortfall = 1.05;
+  const double omega = kShortfall * rates.omega, gamma = kShortfall * rates.gamma;
+  return std::min({criticalStep(integrator, omega, gamma, horizon), criticalStep(integrator, omega, 0.0, horizon),
+                   criticalStep(integrator, 0.0, gamma, horizon)});
+}
+
+StabilitySurvey surveyStability(const Model& model, Integrator integrator, double duration, double frame,
+                                double interval, double tolerance, unsigned threads) {
+  constexpr int kFirstIterations = 60, kIterations = 12;
+  constexpr double kNearest = 1.5;  // where Gershgorin's limit is within this of its smallest
   StabilitySurvey survey;
   World world(model, kDefaultAdaptive, interval);
   world.setTolerance(tolerance);
   world.setThreads(threads);
   Monitor monitor(world);
-  const auto estimate = [&] {
-    const StabilityReport r = estimateStability(model, world.positions(), integrator, duration);
-    ++survey.estimates;
-    if (survey.estimates == 1) survey.atRest = r.dtMax;
-    if (r.dtMax < survey.dtMax) {
-      survey.dtMax = r.dtMax;
+  ModeEstimator modes(world);
+  const auto estimate = [&](bool always) {
+    const double bound = estimateStability(model, world.positions(), integrator, duration).dtMax;
+    const bool near = bound <= kNearest * survey.gershgorin;
+    survey.gershgorin = std::min(survey.gershgorin, bound);
+    if (!always && !near) return;
+    const ModeEstimator::Rates rates =
+        modes.estimate(world.positions(), survey.estimates == 0 ? kFirstIterations : kIterations);
+    const double h = ModeEstimator::step(integrator, rates, duration);
+    if (++survey.estimates == 1) survey.atRest = h;
+    if (h < survey.dtMax) {
+      survey.dtMax = h;
       survey.time = world.time();
-      survey.body = r.limitingBody;
+      survey.body = rates.body;
     }
   };
-  estimate();
+  estimate(true);
   const auto intervals = static_cast<long>(std::ceil(duration / interval - 1e-9));
+  double nextFrame = frame;
   for (long i = 1; i <= intervals && survey.failure.empty(); ++i) {
     const double until = std::min(duration, static_cast<double>(i) * interval);
     while (!world.reached(until) && world.stepProblem().empty()) world.stepToward(until);
@@ -231,7 +334,9 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
     } else if (const auto failure = monitor.check(world)) {
       survey.failure = failure->message;
     } else {
-      estimate();
+      const bool atFrame = until >= nextFrame - 1e-9;
+      if (atFrame) nextFrame += frame;
+      estimate(atFrame);
     }
   }
   return survey;

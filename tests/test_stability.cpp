@@ -39,6 +39,46 @@ TEST(Advisor, GershgorinIsExactForTwoMassesOnAStrut) {
   EXPECT_NEAR(r.bodies[0].gammaMax, 2 * d / 2.0, 1e-12);
 }
 
+TEST(ModeEstimator, FindsTheStrutsModeOfTwoUnequalMasses) {
+  // One mode besides the rigid ones: omega^2 = k (1/m0 + 1/m1), its damping rate d (1/m0 + 1/m1).
+  const double k = 1000.0, d = 4.0, m0 = 1.0, m1 = 3.0;
+  const Model model = test::strutModel(m0, m1, 1.0, k, d, false);
+  const World world(model, Integrator::RK4, 1e-3);
+  ModeEstimator modes(world);
+  const ModeEstimator::Rates r = modes.estimate(model.restPosition, 20);
+  EXPECT_NEAR(r.omega, std::sqrt(k * (1 / m0 + 1 / m1)), 1e-5 * r.omega);
+  EXPECT_NEAR(r.gamma, d * (1 / m0 + 1 / m1), 1e-5 * r.gamma);
+  // The step: the stiffer of the undamped mode and a mode as damped with no stiffness.
+  const double h = ModeEstimator::step(Integrator::RK4, r, 1.0);
+  EXPECT_LE(h, criticalStep(Integrator::RK4, r.omega, 0.0, 1.0));
+  EXPECT_NEAR(h * r.omega * 1.05, 2.0 * std::sqrt(2.0), 0.02);
+}
+
+TEST(ModeEstimator, NeverExceedsGershgorinsBoundAndIsSharperOnAMesh) {
+  // A Rayleigh quotient lies below the largest eigenvalue, which lies below Gershgorin's bound; on
+  // a damped icosphere the found rates are well inside the bound (the bound is loose there).
+  for (const CaseFactory& factory : stabilityCases()) {
+    if (factory.name != "stiff ball") continue;
+    const StabilityCase c = factory.make();
+    const World world(c.model, Integrator::RK4, 1e-4);
+    ModeEstimator modes(world);
+    const ModeEstimator::Rates r = modes.estimate(c.positions, 60);
+    const StabilityReport bound = estimateStability(c.model, c.positions, Integrator::RK4, 0.2);
+    EXPECT_GT(r.omega, 0.0);
+    EXPECT_LE(r.omega, bound.bodies[0].omegaMax * (1 + 1e-6));
+    EXPECT_LE(r.gamma, bound.bodies[0].gammaMax * (1 + 1e-6));
+    // The measured limit (docs/stability.md: 9.5e-5 s for RK4) lies between Gershgorin's step and the
+    // found mode's, and the found mode's is within a factor 2 of it.
+    const double found = ModeEstimator::step(Integrator::RK4, r, 0.2);
+    const MeasuredStep measured = largestStableStep(c.model, Integrator::RK4, 0.2, found, 0.1, &c.positions, 6);
+    EXPECT_GT(found, bound.dtMax);
+    EXPECT_LE(found, measured.dt * 1.05) << "found " << found << ", measured " << measured.dt;
+    EXPECT_GE(found, 0.5 * measured.dt) << "found " << found << ", measured " << measured.dt;
+    return;
+  }
+  FAIL() << "no stiff ball case";
+}
+
 // The prediction must lie within a factor of 2 of the measured limit (strut and hinge cases).
 class PredictionVsMeasurement : public ::testing::TestWithParam<std::tuple<int, Integrator>> {};
 

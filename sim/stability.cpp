@@ -204,8 +204,8 @@ StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x
   return report;
 }
 
-ModeEstimator::ModeEstimator(const World& world) : world_(world) {
-  const Model& model = world.model();
+ModeEstimator::ModeEstimator(const Forces& forces) : forces_(forces) {
+  const Model& model = forces.model();
   const std::size_t n = model.invMass.size();
   invSqrtMass_.resize(n);
   stiff_.resize(n);
@@ -253,11 +253,11 @@ double ModeEstimator::iterate(const std::vector<Vec3>& x, bool damping, std::vec
       }
     }
     if (damping) {
-      world_.computeForces(x.data(), plus_.data(), 0.0, fPlus_.data());
-      world_.computeForces(x.data(), minus_.data(), 0.0, fMinus_.data());
+      forces_.evaluate(x.data(), plus_.data(), 0.0, fPlus_.data());
+      forces_.evaluate(x.data(), minus_.data(), 0.0, fMinus_.data());
     } else {
-      world_.computeForces(plus_.data(), zero_.data(), 0.0, fPlus_.data());
-      world_.computeForces(minus_.data(), zero_.data(), 0.0, fMinus_.data());
+      forces_.evaluate(plus_.data(), zero_.data(), 0.0, fPlus_.data());
+      forces_.evaluate(minus_.data(), zero_.data(), 0.0, fMinus_.data());
     }
     double rayleigh = 0.0;
     largest = 0.0;
@@ -278,7 +278,7 @@ ModeEstimator::Rates ModeEstimator::estimate(const std::vector<Vec3>& x, int ite
   r.omega = std::sqrt(iterate(x, false, stiff_, iterations));
   r.gamma = iterate(x, true, damped_, iterations);
   // The body with the largest share of the stiff mode.
-  const Model& model = world_.model();
+  const Model& model = forces_.model();
   double best = -1.0;
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     double share = 0.0;

@@ -91,7 +91,9 @@ StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x
 // stages are bit-identical on any thread count and the sums here run in vertex order.
 class ModeEstimator {
  public:
-  explicit ModeEstimator(const World& world);
+  // Reads the model and evaluates its forces through `forces` (both must outlive this object).
+  explicit ModeEstimator(const Forces& forces);
+  explicit ModeEstimator(const World& world) : ModeEstimator(world.forces()) {}
   struct Rates {
     double omega = 0, gamma = 0;  // [rad/s], [1/s]
     uint32_t body = 0;            // the body holding most of the stiff mode
@@ -105,7 +107,7 @@ class ModeEstimator {
 
  private:
   double iterate(const std::vector<Vec3>& x, bool damping, std::vector<Vec3>& u, int iterations);
-  const World& world_;
+  const Forces& forces_;
   std::vector<double> invSqrtMass_;
   std::vector<Vec3> stiff_, damped_, plus_, minus_, fPlus_, fMinus_, zero_;
   double epsilon_;  // the differences' largest displacement [m] (or velocity [m/s])

@@ -110,11 +110,26 @@ World::World(Model model, Integrator integrator, double dt)
 }
 
 void World::updateStableStep() {
-  // The advisor's bound (sim/stability.h) at the current shape: a compressed body is stiffer.
-  // The horizon only matters for methods that amplify every mode, which this one does not.
+  // At the current shape: a compressed body is stiffer. The horizon only matters for methods
+  // that amplify every mode, which these do not.
+  constexpr int kFirstIterations = 60, kIterations = 8, kEvaluationsPerIteration = 4;
   const Integrator scheme = integrator_ == Integrator::AdaptiveVerlet ? Integrator::VelocityVerlet : integrator_;
-  const double limit = estimateStability(*model_, x_, scheme, 1.0).dtMax;
+  const double bound = estimateStability(*model_, x_, scheme, 1.0).dtMax;
   sinceStableUpdate_ = 0;
+  if (!std::isfinite(bound)) {
+    stableStep_ = std::numeric_limits<double>::infinity();
+    return;
+  }
+  const bool first = !modes_;
+  if (first) modes_ = std::make_unique<ModeEstimator>(*forces_);
+  if (first || bound < 0.5 * boundAtMode_ || bound > 2.0 * boundAtMode_ || ++sinceMode_ >= 64) {
+    const int iterations = first ? kFirstIterations : kIterations;
+    modeStep_ = ModeEstimator::step(scheme, modes_->estimate(x_, iterations), 1.0);
+    evaluations_ += static_cast<uint64_t>(kEvaluationsPerIteration * iterations);
+    boundAtMode_ = bound;
+    sinceMode_ = 0;
+  }
+  const double limit = std::max(bound, modeStep_ * (bound / boundAtMode_));
   stableStep_ = std::isfinite(limit) ? kStableFraction * limit : std::numeric_limits<double>::infinity();
 }
 

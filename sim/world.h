@@ -65,6 +65,7 @@ std::string integratorNames();
 
 
 class ImplicitSolver;
+class ModeEstimator;
 
 class World {
  public:
@@ -103,8 +104,8 @@ class World {
   // run must stop; the message says when and what to try).
   const std::string& stepProblem() const { return stepProblem_; }
   static constexpr double kMinAdaptiveStep = 1e-9;  // [s]
-  // The adaptive step never exceeds this fraction of the stability advisor's bound at the current
-  // shape (made again every 4 steps and at every stop: a compressed body is stiffer). The
+  // The adaptive step never exceeds this fraction of the stable step of its stiffest mode at the
+  // current shape (updated every 4 steps and at every stop: a compressed body is stiffer). The
   // embedded estimate alone let a mode grow from round-off while it was still too small to see
   // (the hanging sphere's energy rose within 0.07 s at tolerance 1e-3).
   static constexpr double kStableFraction = 0.9;
@@ -199,8 +200,11 @@ class World {
   void accept(double h, double wanted, double factor, double error, bool afterRejection);
   // A vertex touched a static collider within the resting window (impacts are inelastic then).
   bool restingAt(std::size_t i) const;
-  // The adaptive step's stability bound: kStableFraction of the stability advisor's estimate
-  // (sim/stability.h) at the current shape, made again every few steps and at every stop.
+  // The adaptive step's stability bound: kStableFraction of the step its stiffest mode allows
+  // (sim/stability.h, ModeEstimator), at the current shape: Gershgorin's bound, cheap, made again
+  // every few steps and at every stop, tracks the shape's stiffening, and the mode is found again
+  // when that bound has moved by a fifth (or every 64 updates); in between, the mode's step is
+  // scaled by the bound's change. Never below Gershgorin's own step.
   void updateStableStep();
   std::unique_ptr<Model> model_;  // on the heap: Forces keeps its address across moves of the World
   Integrator integrator_;
@@ -222,6 +226,10 @@ class World {
   double hNext_ = 0.0;                   // the controller's next step [s]
   double stableStep_ = 0.0;              // its stability bound [s] (updateStableStep)
   int sinceStableUpdate_ = 0;            // accepted steps since it was made
+  std::unique_ptr<ModeEstimator> modes_;  // the stiffest mode, found again when the bound moves
+  double modeStep_ = 0.0;                // the step it allows [s]
+  double boundAtMode_ = 0.0;             // Gershgorin's step when it was found [s]
+  int sinceMode_ = 0;                    // bound updates since
   bool landed_ = false;                  // the step in progress lands on stop_
   std::vector<double> invScale_;         // per vertex: 1 / (tolerance x its body's rest size)
   std::vector<double> lastContactTime_;  // per vertex: when it last touched a static collider

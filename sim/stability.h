@@ -100,9 +100,9 @@ class ModeEstimator {
   };
   Rates estimate(const std::vector<Vec3>& x, int iterations);
   // The largest step of `integrator` stable on every mode with frequency up to omega and damping
-  // rate up to gamma: the stiff mode as found, undamped, and a mode as damped with no stiffness
-  // (the two rates need not belong to one mode; margin: both raised by 5% for the iteration's
-  // shortfall).
+  // rate up to gamma: the stiff mode as found, undamped (except for explicit Euler, which no
+  // undamped mode leaves stable), and a mode as damped with no stiffness (the two rates need not
+  // belong to one mode; margin: both raised by 5% for the iteration's shortfall).
   static double step(Integrator integrator, const Rates& rates, double horizon);
 
  private:

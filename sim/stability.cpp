@@ -306,6 +306,9 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
                                 double interval, double tolerance, unsigned threads) {
   constexpr int kFirstIterations = 60, kIterations = 12;
   constexpr double kNearest = 1.5;  // where Gershgorin's limit is within this of its smallest
+  // Never finer than a 64th of a frame: a scene with a tiny dt would otherwise spend the survey
+  // on Gershgorin's bound.
+  interval = std::min(frame, std::max(interval, frame / 64));
   StabilitySurvey survey;
   World world(model, kDefaultAdaptive, interval);
   world.setTolerance(tolerance);

@@ -115,11 +115,11 @@ class ModeEstimator {
 
 // The advisor through a whole run (a survey): the estimate holds at the shape it is made at, and
 // an impact compresses a body, which stiffens it (a hinge's gradient grows as its triangles
-// flatten). The survey runs the model over `duration` with the default adaptive step (its own
-// step chosen by tolerance and kept under Gershgorin's bound, so the survey needs no step of its
-// own) and takes the mode estimate above every frame and at every `interval` where Gershgorin's
-// limit comes within 1.5 of the smallest it has seen (where a stiffening shape is); the smallest
-// step over the run is its limit.
+// flatten). The survey runs the model over `duration` with the default adaptive step (its step
+// chosen by tolerance and kept under the same mode's limit, so the survey needs no step of its
+// own). It finds the stiffest mode (above) at every frame, and at every `interval` (at least a
+// 64th of a frame, at most a frame) where Gershgorin's limit comes within 1.5 of the smallest it
+// has seen (a stiffening shape); the smallest step over the run is its limit.
 struct StabilitySurvey {
   double dtMax = std::numeric_limits<double>::infinity();  // smallest over the run [s]
   double atRest = std::numeric_limits<double>::infinity(); // the estimate at t = 0 [s]

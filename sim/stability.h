@@ -12,7 +12,8 @@
 // test mode x'' = -omega_i^2 x - gamma_i x' bounds its step.
 //
 // Stability of an integrator on that mode: the spectral radius rho(h) of its one-step
-// amplification matrix (computed by applying the integrator's own update to the 2x2 system).
+// amplification matrix (computed by applying the integrator's own update to the 2x2 system;
+// velocity Verlet, which keeps its end-of-step acceleration for the next step, on (x, v, a)).
 // A step is stable when rho(h)^(horizon/h) <= sqrt(2), i.e. no mode more than doubles its
 // energy over the run: symplectic and higher-order methods are stable below a sharp limit (2/omega for
 // symplectic Euler, Verlet and leapfrog, about 2.8/omega for RK4); explicit Euler, which

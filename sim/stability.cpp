@@ -1,6 +1,5 @@
 #include "sim/stability.h"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -67,20 +66,43 @@ bool stableAt(Integrator integrator, double omega, double gamma, double h, doubl
 // predicted velocity v + h a, is kept as the next step's a (sim/world.cpp). The state is then
 // (x, v, a), and on a damped mode that halves the stable step (pure damping: h < 1/gamma against
 // 2/gamma when a is evaluated afresh); undamped, the kept a is exact and the limit stays 2/omega.
+// In the dimensionless state (x, h v, h^2 a), with W = omega^2 h^2 and G = gamma h, the map is
+//   [[1, 1, 1/2], [-W/2, 1 - W/2 - G/2, 1/2 - W/4 - G/2], [-W, -W - G, -W/2 - G]];
+// its spectral radius from the characteristic polynomial: the cubic's real root, then the
+// quadratic left (whose complex pair has |l|^2 = its constant term, free of cancellation).
 double verletAmplification(double w2, double g, double h) {
-  // In the dimensionless state (x, h v, h^2 a): with a itself the matrix would hold w2 beside 1,
-  // and the eigenvalue solver's round-off (1e-16 of the largest entry) would read as growth.
-  Eigen::Matrix3d map;
-  for (int c = 0; c < 3; ++c) {
-    const double x = c == 0, v = (c == 1) / h, a = (c == 2) / (h * h);
-    const double x1 = x + h * v + 0.5 * h * h * a;
-    const double a1 = -w2 * x1 - g * (v + h * a);
-    map.col(c) << x1, h * (v + 0.5 * h * (a + a1)), h * h * a1;
+  const double W = w2 * h * h, G = g * h;
+  const double m[3][3] = {{1.0, 1.0, 0.5},
+                          {-0.5 * W, 1.0 - 0.5 * W - 0.5 * G, 0.5 - 0.25 * W - 0.5 * G},
+                          {-W, -W - G, -0.5 * W - G}};
+  const double t = m[0][0] + m[1][1] + m[2][2];
+  const double minors = (m[0][0] * m[1][1] - m[0][1] * m[1][0]) + (m[0][0] * m[2][2] - m[0][2] * m[2][0]) +
+                        (m[1][1] * m[2][2] - m[1][2] * m[2][1]);
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  // l^3 - t l^2 + minors l - det = 0; with l = y + t/3: y^3 + p y + q = 0.
+  const double p = minors - t * t / 3.0, q = -2.0 * t * t * t / 27.0 + t * minors / 3.0 - det;
+  const double disc = 0.25 * q * q + p * p * p / 27.0;
+  double rho;
+  if (disc > 0.0) {  // one real root and a complex pair (or a double real pair)
+    const double s = std::sqrt(disc);
+    const double root = std::cbrt(-0.5 * q + s) + std::cbrt(-0.5 * q - s) + t / 3.0;
+    const double b = t - root, c = minors - root * b;  // l^2 - b l + c
+    const double d2 = 0.25 * b * b - c;
+    const double pair = d2 < 0.0 ? std::sqrt(std::max(c, 0.0))
+                                 : std::max(std::fabs(0.5 * b + std::sqrt(d2)), std::fabs(0.5 * b - std::sqrt(d2)));
+    rho = std::max(std::fabs(root), pair);
+  } else {  // three real roots
+    const double r = std::sqrt(-p / 3.0);
+    const double phi = std::acos(std::clamp(-0.5 * q / (r * r * r), -1.0, 1.0));
+    rho = 0.0;
+    for (int k = 0; k < 3; ++k) {
+      rho = std::max(rho, std::fabs(2.0 * r * std::cos((phi - 2.0 * M_PI * k) / 3.0) + t / 3.0));
+    }
   }
-  // Far below the limit the pair of eigenvalues near 1 is nearly double, and the solver moves
-  // them by about 1e-16 / (omega h): that much above 1 is round-off, not growth (the scan in
-  // criticalStep starts at 1e-6 / rate, where the horizon over h would make it an instability).
-  const double rho = map.eigenvalues().cwiseAbs().maxCoeff();
+  // Far below the limit two roots sit near 1 and their round-off can read as growth of about
+  // 1e-16 / (omega h); a true instability is orders larger.
   return rho <= 1.0 + 1e-9 ? std::min(rho, 1.0) : rho;
 }
 
@@ -106,8 +128,10 @@ double amplification(Integrator integrator, double omega, double gamma, double h
 double criticalStep(Integrator integrator, double omega, double gamma, double horizon) {
   const double rate = std::max(omega, gamma);
   if (integrator == Integrator::BackwardEuler || !(rate > 0.0)) return std::numeric_limits<double>::infinity();
-  // Scan upward from a surely stable step for the first unstable one, then bisect.
-  double lo = 1e-6 / rate;
+  // Scan upward from a surely stable step for the first unstable one, then bisect. Every method
+  // but explicit Euler is stable on the mode far below 1 / rate; explicit Euler's limit from the
+  // horizon can be far smaller.
+  double lo = (integrator == Integrator::ExplicitEuler ? 1e-6 : 1e-3) / rate;
   if (!stableAt(integrator, omega, gamma, lo, horizon)) return lo;
   double hi = lo;
   while (stableAt(integrator, omega, gamma, hi, horizon)) {

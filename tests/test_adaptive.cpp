@@ -141,7 +141,7 @@ TEST(Adaptive, ShortensTheStepAtAnImpactAndLengthensItInFlight) {
   const double gershgorin =
       estimateStability(world.model(), world.model().restPosition, Integrator::BogackiShampine, 1.0).dtMax;
   EXPECT_GT(typicalFlight, 0.8 * bound);
-  EXPECT_LE(typicalFlight, bound * (1.0 + 1e-6));
+  EXPECT_LE(typicalFlight, bound * (1.0 + 1e-12));
   EXPECT_GT(typicalFlight, 2.0 * gershgorin);
   EXPECT_GT(world.stepStats().rejected, 0u) << "an impact's first try is too long";
 }

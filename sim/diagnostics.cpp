@@ -41,10 +41,12 @@ uint32_t firstAtLeast(uint32_t lo, uint32_t hi, uint32_t bound, Key key) {
 }  // namespace
 
 BodyMeasures measureBody(const World& world, uint32_t body) {
+  return measureBody(world, body, world.positions().data(), world.velocities().data());
+}
+
+BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const Vec3* v) {
   const Model& model = world.model();
   const BodyInfo& info = model.bodies[body];
-  const Vec3* x = world.positions().data();
-  const Vec3* v = world.velocities().data();
   const uint32_t regions = std::max(1u, (info.vertexCount + kRegionVertices - 1) / kRegionVertices);
   // Element boundaries of the regions: struts by their first end (i < j), hinges by the lower
   // vertex of their edge.

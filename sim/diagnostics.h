@@ -27,6 +27,8 @@ struct BodyMeasures {
 };
 
 BodyMeasures measureBody(const World& world, uint32_t body);
+// The same of a state (x, v) other than the world's (e.g. World::synchronizedState).
+BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const Vec3* v);
 
 // FNV-1a over the raw bits of positions, velocities and time: equal hashes mean bit-identical
 // states.

@@ -7,6 +7,15 @@
 
 namespace springy {
 
+std::string failureKind(const std::string& m) {
+  return m.find("NaN") != std::string::npos              ? "nan"
+         : m.find("blew up") != std::string::npos        ? "blow-up"
+         : m.find("energy") != std::string::npos         ? "energy"
+         : m.find("behind a plane") != std::string::npos ? "penetration"
+         : m.find("volume") != std::string::npos         ? "volume"
+                                                         : "other";
+}
+
 RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, double horizon,
                         const std::vector<Vec3>* initialPositions) {
   World world(model, integrator, dt);
@@ -27,13 +36,7 @@ RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, do
       out.stable = false;
       out.failure = failure->message;
       out.step = failure->step;
-      const std::string& m = failure->message;
-      out.kind = m.find("NaN") != std::string::npos         ? "nan"
-                 : m.find("blew up") != std::string::npos   ? "blow-up"
-                 : m.find("energy") != std::string::npos    ? "energy"
-                 : m.find("behind a plane") != std::string::npos ? "penetration"
-                 : m.find("volume") != std::string::npos    ? "volume"
-                                                                 : "other";
+      out.kind = failureKind(failure->message);
       break;
     }
   }

@@ -22,6 +22,9 @@ struct RunOutcome {
   uint64_t step = 0;     // the step at which it failed
   bool finiteAtEnd = true;  // every position and velocity finite when the run stopped
 };
+// The kind of a monitor's failure message, as RunOutcome::kind.
+std::string failureKind(const std::string& message);
+
 RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, double horizon,
                         const std::vector<Vec3>* initialPositions = nullptr);
 

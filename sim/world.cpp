@@ -163,6 +163,7 @@ void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
   v_ = std::move(v);
   time_ = time;
   cachedAccelerationValid_ = false;
+  staggered_ = false;
   std::fill(sinceContact_.begin(), sinceContact_.end(), 0xFFFF);
   std::fill(lastContactTime_.begin(), lastContactTime_.end(), -std::numeric_limits<double>::infinity());
 }
@@ -230,6 +231,22 @@ void World::stepSymplecticEuler() {
     v[i] += a[i] * dt;
     x[i] += v[i] * dt;
   });
+  staggered_ = true;  // a_ keeps a(x(n)) for synchronizedState
+}
+
+bool World::synchronizedState(std::vector<Vec3>& x, std::vector<Vec3>& v) const {
+  if (!staggered_ || integrator_ != Integrator::SymplecticEuler) return false;
+  const std::size_t n = x_.size();
+  x.resize(n);
+  v.resize(n);
+  const bool old = keepsOld();  // xOld is x(n) exactly, also where a contact moved a vertex
+  forVertices([&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      x[i] = old ? xOld_[i] : x_[i] - v_[i] * dt_;
+      v[i] = v_[i] - a_[i] * (0.5 * dt_);
+    }
+  });
+  return true;
 }
 
 void World::stepVelocityVerlet() {

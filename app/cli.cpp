@@ -1,7 +1,9 @@
 #include "app/cli.h"
 
 #include <algorithm>
+#include <filesystem>
 
+#include "app/child.h"
 #include "sim/limits.h"
 
 namespace springy {
@@ -62,7 +64,7 @@ void addRunOverrides(CLI::App* cmd, RunOverrides& o) {
       ->allow_extra_args(false);
 }
 
-#ifdef SPRINGY_HAVE_RENDER
+#if defined(SPRINGY_HAVE_RENDER) || defined(SPRINGY_RENDER_HELPER)
 void addRenderOverrides(CLI::App* cmd, RenderOverrides& o) {
   cmd->add_option("--width", o.width, "Frame width in pixels (even)");
   cmd->add_option("--height", o.height, "Frame height in pixels (even)");
@@ -123,7 +125,7 @@ CommandLine::CommandLine() {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
 
-#ifdef SPRINGY_HAVE_RENDER
+#if defined(SPRINGY_HAVE_RENDER) || defined(SPRINGY_RENDER_HELPER)
   renderCmd = app.add_subcommand("render", "Simulate scenes and encode MP4 videos (H.264)");
   renderCmd->add_option("scenes", render.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   renderCmd->add_option("-o,--output", render.output,
@@ -186,9 +188,16 @@ int CommandLine::dispatch() {
   if (checkCmd->parsed()) return runCheck(check);
   if (suggestCmd->parsed()) return runSuggest(suggest);
   if (studyCmd->parsed()) return runStudy(study);
-#ifdef SPRINGY_HAVE_RENDER
+#if defined(SPRINGY_HAVE_RENDER)
   if (renderCmd->parsed()) return runRender(render);
   if (framesCmd->parsed()) return runFrames(frames);
+#elif defined(SPRINGY_RENDER_HELPER)
+  // The drawing runs in springy-render beside this executable (app/CMakeLists.txt), with the same
+  // arguments, parsed here already: a bad one fails here, the same way.
+  if (renderCmd->parsed() || framesCmd->parsed()) {
+    const std::filesystem::path helper = std::filesystem::path(selfExecutable()).parent_path() / SPRINGY_RENDER_HELPER;
+    return runChild(helper.string(), args);
+  }
 #endif
   if (sweepCmd->parsed()) return runSweep(sweep);
   if (runTaskCmd->parsed()) return springy::runTask(runTask);
@@ -197,6 +206,7 @@ int CommandLine::dispatch() {
 }
 
 void parseCommandLine(CommandLine& cli, std::vector<std::string> args) {
+  cli.args = args;
   std::reverse(args.begin(), args.end());  // CLI11 takes them last first
   cli.app.parse(args);
 }

@@ -31,6 +31,7 @@ struct CommandLine {
   CLI::App* checkCmd = nullptr;
   CLI::App* suggestCmd = nullptr;
   CLI::App* studyCmd = nullptr;
+  std::vector<std::string> args;  // the arguments parsed (without the program's name)
   CLI::App* renderCmd = nullptr;  // null without the renderer
   CLI::App* framesCmd = nullptr;
   CLI::App* sweepCmd = nullptr;

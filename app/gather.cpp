@@ -12,7 +12,7 @@
 #include "app/sweep.h"
 #include "sim/error.h"
 
-#ifdef SPRINGY_HAVE_RENDER
+#ifdef SPRINGY_HAVE_IMAGES
 #include "render/image.h"
 #include "render/text.h"
 #endif
@@ -127,7 +127,7 @@ std::string jsonTable(const std::vector<Row>& rows) {
   return table.dump(2) + "\n";
 }
 
-#ifdef SPRINGY_HAVE_RENDER
+#ifdef SPRINGY_HAVE_IMAGES
 // The lowest volume of any body of the task (of rest), or NaN (none: an open surface, no result).
 double lowestVolume(const Json& result) {
   double lowest = std::numeric_limits<double>::quiet_NaN();
@@ -265,7 +265,7 @@ std::size_t gatherSweep(const std::vector<SweepTask>& tasks) {
   }
   writeFileAtomically("table.csv", csvTable(rows, pointKeys(tasks)));
   writeFileAtomically("table.json", jsonTable(rows));
-#ifdef SPRINGY_HAVE_RENDER
+#ifdef SPRINGY_HAVE_IMAGES
   writeMaps(rows);
 #endif
   std::printf("gather: table.csv, table.json: %zu tasks, %zu ok, %zu failed, %zu errors, %zu missing\n", tasks.size(),

@@ -9,6 +9,7 @@ int main(int argc, char** argv) {
   springy::CommandLine cli;
   springy::installInterruptHandler();
   try {
+    cli.args.assign(argv + 1, argv + argc);
     cli.app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return cli.app.exit(e);

@@ -28,6 +28,7 @@
 #include <thread>
 
 #include "app/atomic_file.h"
+#include "app/child.h"
 #include "app/cli.h"
 #include "app/commands.h"
 #include "app/sweep.h"
@@ -399,12 +400,6 @@ std::string manifestLine(const SweepTask& t) {
 // ---------------------------------------------------------------------------------------------
 // Running.
 
-std::string selfExecutable() {
-  std::error_code error;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", error);
-  if (error) throw Error("cannot find springy's own executable (/proc/self/exe): " + error.message());
-  return exe.string();
-}
 
 // The cores this process may run on (its affinity mask: taskset, a cgroup's cpuset).
 unsigned usableCores() {
@@ -427,24 +422,6 @@ std::string describe(const SweepTask& t) {
     text += " " + key + "=" + (value.is_string() ? value.get<std::string>() : value.dump());
   }
   return text;
-}
-
-// Sleeps until one of the children may have exited, a signal arrived, or 200 ms passed: a poll on
-// the children's pidfds (Linux 5.3+; poll is never restarted after a signal handler, so an
-// interrupt wakes it), or a 20 ms nap where pidfds are not available.
-void waitForAChild(const std::vector<pid_t>& children) {
-  std::vector<pollfd> fds;
-  for (const pid_t child : children) {
-    const int fd = static_cast<int>(::syscall(SYS_pidfd_open, child, 0));
-    if (fd < 0) break;
-    fds.push_back({fd, POLLIN, 0});
-  }
-  if (fds.size() == children.size() && !fds.empty()) {
-    ::poll(fds.data(), fds.size(), 200);
-  } else {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  for (const pollfd& p : fds) ::close(p.fd);
 }
 
 pid_t spawnTask(const std::string& exe, const SweepTask& task, unsigned threads) {

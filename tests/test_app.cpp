@@ -35,6 +35,31 @@ class AppTest : public ::testing::Test {
   fs::path dir_;
 };
 
+// The shared libraries a program loads (ldd), one name per line.
+std::string sharedLibraries(const std::string& program) {
+  std::string out;
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(::popen(("ldd " + program + " 2>&1").c_str(), "r"), ::pclose);
+  std::array<char, 4096> buffer{};
+  while (pipe && std::fgets(buffer.data(), buffer.size(), pipe.get())) out += buffer.data();
+  return out;
+}
+
+TEST(Program, SpringyLoadsNoDrawingLibrariesAndRenderRunsBesideIt) {
+  // OSMesa (with LLVM) and FFmpeg bring about 150 shared libraries, which took 60 ms to load and
+  // start at every command (a 2562-vertex ball's whole check takes 220 ms on one thread): springy
+  // links neither, and render and frames run springy-render from its directory.
+  const std::string springy = sharedLibraries(SPRINGY_BINARY);
+  ASSERT_NE(springy.find("libc.so"), std::string::npos) << springy;
+  EXPECT_EQ(springy.find("OSMesa"), std::string::npos) << springy;
+  EXPECT_EQ(springy.find("libavcodec"), std::string::npos) << springy;
+  const fs::path helper = fs::path(SPRINGY_BINARY).parent_path() / "springy-render";
+  EXPECT_NE(sharedLibraries(helper.string()).find("OSMesa"), std::string::npos);
+  // A bad argument of render is refused with its message, exit status and all, through the helper.
+  const Result bad = run("render " + data("tiny.toml") + " --width 7");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.output.find("width"), std::string::npos) << bad.output;
+}
+
 TEST_F(AppTest, CheckPassesAStableSceneAndReportsPerBody) {
   const Result r = run("check " + data("tiny.toml"));
   EXPECT_EQ(r.status, 0) << r.output;

@@ -83,7 +83,7 @@ class Monitor {
   // positions and velocities are half a step apart, and their energy swings by up to
   // 1/(1 - omega h/2) where the method keeps it (World::synchronizedState). Only then, so that a
   // run that passes pays nothing for it; the confirmed energies replace the body's (m).
-  bool readAtOneInstant(const World& world, uint32_t body, BodyMeasures& m);
+  void readAtOneInstant(const World& world, uint32_t body, BodyMeasures& m);
   enum class Synchronized { NotYet, Yes, No };  // in this check
   Synchronized synchronized_ = Synchronized::NotYet;
   std::vector<Vec3> xSync_, vSync_;

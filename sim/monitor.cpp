@@ -27,6 +27,14 @@ double supportHeight(const Model& model, const Vec3& up, double fallback) {
   return lowest;
 }
 
+// What a rise above the lowest total is measured against: what was left to spend at the lowest
+// (a body at rest on the ground: its fall to flat, m g times its centroid's height), never more
+// than the start's scale, and never below a millionth of it (round-off in the gravitational
+// energy, counted from the origin, and a body at rest in zero gravity with nothing left).
+double lowestAllowance(double scale, double spendableAtLowest) {
+  return std::clamp(spendableAtLowest, 1e-6 * scale, scale);
+}
+
 std::string describe(const World& world, uint32_t body, const std::string& what, const std::string& advice) {
   std::ostringstream s;
   s << "body '" << world.model().bodies[body].name << "' at step " << world.stepCount() << " (t = " << world.time()
@@ -49,18 +57,19 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
   const Model& model = world.model();
   // With wind, energy is injected from outside: the energy check would be meaningless.
   checkEnergy_ = !model.wind.has_value();
-  const double g = length(model.gravity);
-  const Vec3 up = g > 0.0 ? model.gravity / -g : Vec3{0, 1, 0};
+  g_ = length(model.gravity);
+  up_ = g_ > 0.0 ? model.gravity / -g_ : Vec3{0, 1, 0};
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     BodyRecord r;
     r.start = r.last = measureBody(world, b);
     const BodyInfo& info = model.bodies[b];
-    const double height = dot(r.start.centroid, up) - supportHeight(model, up, dot(r.start.centroid, up) - info.restSize);
-    // The energy the body has to spend: kinetic + elastic + the fall to its support.
-    r.energyScale = r.start.kinetic + r.start.elastic + info.mass * g * std::max(info.restSize, height);
-    if (!(r.energyScale > 0.0)) r.energyScale = 1e-12;
+    support_.push_back(supportHeight(model, up_, dot(r.start.centroid, up_) - info.restSize));
+    // At least the energy of lifting the body by its own size: the scale is not zero for a
+    // body that starts at rest on the ground or in zero gravity.
+    r.energyScale = std::max(spendable(info, b, r.start, info.restSize), 1e-12);
     r.lowestTotal = r.start.total();
     r.lowestTotalTime = world.time();
+    r.lowestSpendable = r.energyScale;
     records_.push_back(r);
   }
   if (world.bodyContacts() != nullptr) {
@@ -70,9 +79,15 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
       touchingScale_ += records_[b].energyScale;
       touchingLowest_ += records_[b].start.total();
     }
+    touchingSpendable_ = touchingScale_;
     if (touching_.size() < 2) touching_.clear();
     touchingLowestTime_ = world.time();
   }
+}
+
+double Monitor::spendable(const BodyInfo& info, uint32_t body, const BodyMeasures& m, double leastFall) const {
+  const double fall = std::max(leastFall, dot(m.centroid, up_) - support_[body]);
+  return m.kinetic + m.elastic + info.mass * g_ * fall;
 }
 
 void Monitor::readAtOneInstant(const World& world, uint32_t body, BodyMeasures& m) {
@@ -114,18 +129,27 @@ std::optional<Failure> Monitor::check(const World& world) {
     // (not only above the start: a body that has lost most of its energy and gains it back at
     // rest is as wrong) is an instability.
     const bool touching = std::binary_search(touching_.begin(), touching_.end(), b);
+    // Counted from the lowest, the rise is measured against what the body had left to spend
+    // then, not what it had at the start: once a fall's energy is spent, an instability that
+    // saturates (its pumping balanced by damping and drag) is no longer hidden under the fall's
+    // 2 %. From the start, against the start's.
     const double reference = limits_.energyFromLowest ? r.lowestTotal : r.start.total();
-    const auto rose = [&] { return m.total() - reference > limits_.energyTolerance * r.energyScale; };
+    const double allowed =
+        limits_.energyTolerance * (limits_.energyFromLowest ? lowestAllowance(r.energyScale, r.lowestSpendable) : r.energyScale);
+    const auto rose = [&] { return m.total() - reference > allowed; };
     if (checkEnergy_ && !touching && rose()) readAtOneInstant(world, b, m);
     if (checkEnergy_ && !touching && rose()) {
       std::ostringstream s;
       s << "its total energy rose from " << reference << " J";
       if (limits_.energyFromLowest) s << " (its lowest, at t = " << r.lowestTotalTime << " s)";
-      s << " to " << m.total() << " J although nothing injects energy (the integration is unstable or too coarse)";
+      s << " to " << m.total() << " J, more than " << allowed << " J, although nothing injects energy (the integration is unstable or too coarse)";
       return fail(s.str(), stepAdvice(info));
     }
     r.last = m;
-    if (m.total() < r.lowestTotal) r.lowestTotal = m.total(), r.lowestTotalTime = world.time();
+    if (m.total() < r.lowestTotal) {
+      r.lowestTotal = m.total(), r.lowestTotalTime = world.time();
+      r.lowestSpendable = spendable(info, b, m, 0.0);
+    }
     if (m.penetration > limits_.penetration * info.restSize) {
       std::ostringstream s;
       s << "a vertex is " << m.penetration << " m behind a plane";
@@ -165,7 +189,9 @@ std::optional<Failure> Monitor::check(const World& world) {
       }
     }
     const double reference = limits_.energyFromLowest ? touchingLowest_ : start;
-    if (total - reference > limits_.energyTolerance * touchingScale_) {
+    const double allowed = limits_.energyTolerance *
+                           (limits_.energyFromLowest ? lowestAllowance(touchingScale_, touchingSpendable_) : touchingScale_);
+    if (total - reference > allowed) {
       // Read at one instant (symplectic Euler), the rise may go.
       total = 0.0;
       for (uint32_t b : touching_) {
@@ -173,19 +199,23 @@ std::optional<Failure> Monitor::check(const World& world) {
         total += records_[b].last.total();
       }
     }
-    if (total - reference > limits_.energyTolerance * touchingScale_) {
+    if (total - reference > allowed) {
       std::ostringstream s;
       s << "the total energy of the bodies in contact (";
       for (std::size_t k = 0; k < touching_.size(); ++k)
         s << (k ? ", " : "") << "'" << model.bodies[touching_[k]].name << "'";
       s << ") rose from " << reference << " J";
       if (limits_.energyFromLowest) s << " (its lowest, at t = " << touchingLowestTime_ << " s)";
-      s << " to " << total
-        << " J although nothing injects energy (the integration or the contact is unstable or too coarse)";
+      s << " to " << total << " J, more than " << allowed
+        << " J, although nothing injects energy (the integration or the contact is unstable or too coarse)";
       return Failure{named, world.stepCount(), world.time(),
                      describe(world, named, s.str(), stepAdvice(model.bodies[named]))};
     }
-    if (total < touchingLowest_) touchingLowest_ = total, touchingLowestTime_ = world.time();
+    if (total < touchingLowest_) {
+      touchingLowest_ = total, touchingLowestTime_ = world.time();
+      touchingSpendable_ = 0.0;
+      for (uint32_t b : touching_) touchingSpendable_ += spendable(model.bodies[b], b, records_[b].last, 0.0);
+    }
   }
   // Bodies crossing each other or themselves: whatever the contact stage did, never a silent
   // pass-through (sim/intersections.h).

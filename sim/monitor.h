@@ -35,9 +35,12 @@ struct Failure {
 // Per-body running extremes, for reports.
 struct BodyRecord {
   BodyMeasures start, last;
-  double energyScale = 0.0;   // [J] the energy a failure is measured against
+  double energyScale = 0.0;   // [J] the energy the body has to spend at the start: kinetic +
+                              // elastic + its fall to its support (at least its own size)
   double lowestTotal = 0.0;   // [J] the lowest total energy so far, and when
   double lowestTotalTime = 0.0;
+  double lowestSpendable = 0.0;  // [J] what it had left to spend then (as energyScale, measured
+                                 // at that moment): a rise above the lowest is measured against it
   double maxStrain = 0.0;
   double maxPenetration = 0.0;
   double minVolumeRatio = 1.0, maxVolumeRatio = 1.0;
@@ -79,6 +82,12 @@ class Monitor {
   // Bodies that touch each other (sim/contact.h) pass energy between them: their energy is
   // checked as one sum, which nothing may raise.
   std::vector<uint32_t> touching_;
+  Vec3 up_;                       // against gravity
+  double g_ = 0.0;                // |gravity|
+  std::vector<double> support_;   // per body: the height its fall ends at (along up_)
+  // The energy a body still has to spend in the state m: kinetic + elastic + its fall to its
+  // support (of its centroid, at least leastFall).
+  double spendable(const BodyInfo& info, uint32_t body, const BodyMeasures& m, double leastFall) const;
   // A rise of a body's energy is confirmed at one instant before it counts: symplectic Euler's
   // positions and velocities are half a step apart, and their energy swings by up to
   // 1/(1 - omega h/2) where the method keeps it (World::synchronizedState). Only then, so that a
@@ -87,7 +96,7 @@ class Monitor {
   enum class Synchronized { NotYet, Yes, No };  // in this check
   Synchronized synchronized_ = Synchronized::NotYet;
   std::vector<Vec3> xSync_, vSync_;
-  double touchingScale_ = 0.0, touchingLowest_ = 0.0, touchingLowestTime_ = 0.0;
+  double touchingScale_ = 0.0, touchingLowest_ = 0.0, touchingLowestTime_ = 0.0, touchingSpendable_ = 0.0;
 };
 
 }  // namespace springy

@@ -29,6 +29,8 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
   };
   sample();
   double seconds = 0.0;
+  RestWatch rest;  // over the last second, as `springy check --end-at-rest`
+  const double watchFrom = settings.duration - RestWatch::kWindow;
   for (long f = 1; f <= frames; ++f) {
     const double until = static_cast<double>(f) * settings.frame;
     const auto start = std::chrono::steady_clock::now();
@@ -43,8 +45,11 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
       break;
     }
     sample();
+    if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
   }
   path.complete = path.failure.empty();
+  for (uint32_t b = 0; b < model.bodies.size() && path.complete; ++b)
+    path.endsAtRest.push_back(rest.atRest(model.bodies[b]));
   path.wallSeconds = seconds;
   path.steps = world.stepCount();
   path.evaluations = world.forceEvaluations();

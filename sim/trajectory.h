@@ -30,6 +30,7 @@ struct RunPath {
   std::vector<std::vector<Vec3>> centroid;  // [frame][body]
   std::vector<std::vector<double>> volume;  // [frame][body] (0 for an open surface)
   bool complete = false;                    // reached the duration under the monitor
+  std::vector<bool> endsAtRest;             // [body] still over the last second (RestWatch)
   std::string failure;                      // the monitor's message otherwise
   double wallSeconds = 0.0;                 // the stepping alone (no sampling)
   uint64_t steps = 0, evaluations = 0;

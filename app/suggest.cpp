@@ -217,7 +217,9 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
         << "; estimated stable limit for " << integratorName(scene.integrator) << " over the whole run "
         << seconds(survey.dtMax) << ", at t = " << number(survey.time) << " s in body '"
-        << model.bodies[survey.body].name << "'; at rest " << seconds(survey.atRest) << ")\n";
+        << model.bodies[survey.body].name << "'"
+        << (survey.landing ? ", set by the energy its landing may add" : "") << "; at rest "
+        << seconds(survey.atRest) << ")\n";
   } else if (choice == StepChoice::Default) {
     const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);

@@ -23,7 +23,7 @@ RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, do
   // Stability, not accuracy: energy may wander (a symplectic method's energy error is O(dt)),
   // but never rise by more than its own scale.
   MonitorLimits limits;
-  limits.energyTolerance = 1.0;
+  limits.energyTolerance = kCaseEnergyTolerance;
   limits.energyFromLowest = false;
   Monitor monitor(world, limits);
   RunOutcome out;

@@ -22,6 +22,9 @@ struct RunOutcome {
   uint64_t step = 0;     // the step at which it failed
   bool finiteAtEnd = true;  // every position and velocity finite when the run stopped
 };
+// The energy rise a measuring run allows, as a fraction of the body's scale (the monitor's
+// default is 2 %: a measuring run asks for stability, not accuracy).
+constexpr double kCaseEnergyTolerance = 1.0;
 // The kind of a monitor's failure message, as RunOutcome::kind.
 std::string failureKind(const std::string& message);
 

@@ -4,20 +4,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <sstream>
 
 namespace springy {
 namespace {
 
-// The lowest point any collider offers along gravity (where a falling body could end up), or
-// the body's own rest size below it when there are no colliders.
-double supportHeight(const Model& model, const Vec3& up, double fallback) {
-  double lowest = fallback;
-  bool any = false;
-  auto consider = [&](double h) {
-    lowest = any ? std::min(lowest, h) : h;
-    any = true;
-  };
+// The lowest point any collider offers along gravity (where a falling body could end up), if any.
+std::optional<double> lowestSupport(const Model& model, const Vec3& up) {
+  std::optional<double> lowest;
+  auto consider = [&](double h) { lowest = lowest ? std::min(*lowest, h) : h; };
   for (const PlaneCollider& p : model.colliders.planes) {
     if (dot(p.normal, up) > 0.5) consider(dot(p.point, up));
   }
@@ -25,6 +22,11 @@ double supportHeight(const Model& model, const Vec3& up, double fallback) {
     for (const Vec3& p : t.mesh.positions) consider(dot(p, up));
   }
   return lowest;
+}
+
+Vec3 upOf(const Model& model) {
+  const double g = length(model.gravity);
+  return g > 0.0 ? model.gravity / -g : Vec3{0, 1, 0};
 }
 
 // What a rise above the lowest total is measured against: what was left to spend at the lowest
@@ -53,17 +55,36 @@ std::string stepAdvice(const BodyInfo& body) {
 
 }  // namespace
 
+double landingStep(const World& world, uint32_t body, double tolerance) {
+  const Model& model = world.model();
+  const double g = length(model.gravity);
+  const Vec3 up = upOf(model);
+  const std::optional<double> support = lowestSupport(model, up);
+  const BodyInfo& info = model.bodies[body];
+  if (!(g > 0.0) || !support || !(info.mass > 0.0)) return std::numeric_limits<double>::infinity();
+  double lowest = std::numeric_limits<double>::infinity();
+  const std::vector<Vec3>& x = world.positions();
+  for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) lowest = std::min(lowest, dot(x[i], up));
+  const BodyMeasures m = measureBody(world, body);
+  const double speed = std::sqrt(2.0 * m.kinetic / info.mass + 2.0 * g * std::max(0.0, lowest - *support));
+  const double left = m.kinetic + m.elastic + info.mass * g * std::max(0.0, dot(m.centroid, up) - *support);
+  if (!(speed > 0.0)) return std::numeric_limits<double>::infinity();
+  return tolerance * left / (info.mass * g * speed);
+}
+
 Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
   const Model& model = world.model();
   // With wind, energy is injected from outside: the energy check would be meaningless.
   checkEnergy_ = !model.wind.has_value();
   g_ = length(model.gravity);
-  up_ = g_ > 0.0 ? model.gravity / -g_ : Vec3{0, 1, 0};
+  up_ = upOf(model);
+  const std::optional<double> support = lowestSupport(model, up_);
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     BodyRecord r;
     r.start = r.last = measureBody(world, b);
     const BodyInfo& info = model.bodies[b];
-    support_.push_back(supportHeight(model, up_, dot(r.start.centroid, up_) - info.restSize));
+    // Without colliders, its own rest size below it.
+    support_.push_back(support ? *support : dot(r.start.centroid, up_) - info.restSize);
     // At least the energy of lifting the body by its own size: the scale is not zero for a
     // body that starts at rest on the ground or in zero gravity.
     r.energyScale = std::max(spendable(info, b, r.start, info.restSize), 1e-12);

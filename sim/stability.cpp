@@ -367,7 +367,7 @@ double ModeEstimator::step(Integrator integrator, const Rates& rates, double hor
 
 StabilitySurvey surveyStability(const Model& model, Integrator integrator, double duration, double frame,
                                 double interval, double tolerance, unsigned threads,
-                                const std::vector<Vec3>* initial) {
+                                const std::vector<Vec3>* initial, double landingTolerance) {
   constexpr int kFirstIterations = 60, kIterations = 12;
   constexpr double kNearest = 1.5;  // where Gershgorin's limit is within this of its smallest
   // Never finer than a 64th of a frame: a scene with a tiny dt would otherwise spend the survey
@@ -393,9 +393,24 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
       survey.dtMax = h;
       survey.time = world.time();
       survey.body = rates.body;
+      survey.landing = false;
+    }
+  };
+  // At every frame: the step a landing allows (sim/monitor.h), for every method (backward Euler's
+  // landings too put vertices back on their support).
+  const auto landings = [&] {
+    for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+      const double h = landingStep(world, b, landingTolerance);
+      if (h < survey.dtMax) {
+        survey.dtMax = h;
+        survey.time = world.time();
+        survey.body = b;
+        survey.landing = true;
+      }
     }
   };
   estimate(true);
+  landings();
   const auto intervals = static_cast<long>(std::ceil(duration / interval - 1e-9));
   double nextFrame = frame;
   for (long i = 1; i <= intervals && survey.failure.empty(); ++i) {
@@ -409,6 +424,7 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
       const bool atFrame = until >= nextFrame - 1e-9;
       if (atFrame) nextFrame += frame;
       estimate(atFrame);
+      if (atFrame) landings();
     }
   }
   return survey;

@@ -123,7 +123,9 @@ class ModeEstimator {
 // chosen by tolerance and kept under the same mode's limit, so the survey needs no step of its
 // own). It finds the stiffest mode (above) at every frame, and at every `interval` (at least a
 // 64th of a frame, at most a frame) where Gershgorin's limit comes within 1.5 of the smallest it
-// has seen (a stiffening shape); the smallest step over the run is its limit.
+// has seen (a stiffening shape); and at every frame the step each body's landing allows (its
+// energy error, sim/monitor.h landingStep, at the monitor's tolerance). The smallest step over
+// the run is its limit.
 struct StabilitySurvey {
   double dtMax = std::numeric_limits<double>::infinity();  // smallest over the run [s]
   double atRest = std::numeric_limits<double>::infinity(); // the estimate at t = 0 [s]
@@ -131,12 +133,14 @@ struct StabilitySurvey {
   double time = 0.0;                                        // when the smallest was seen [s]
   uint32_t body = 0;                                        // and in which body
   uint32_t estimates = 0;                                   // mode estimates made
+  bool landing = false;  // the smallest is a landing's (sim/monitor.h landingStep), not a mode's
   std::string failure;  // non-empty if the survey run itself failed (the limit then covers the run up to it)
 };
 // `initial`: the positions at t = 0 (null: the rest shape), as for a case released deformed.
+// `landingTolerance`: the energy rise a landing may add, as a fraction (the monitor's: 2 %).
 StabilitySurvey surveyStability(const Model& model, Integrator integrator, double duration, double frame,
                                 double interval, double tolerance, unsigned threads = 1,
-                                const std::vector<Vec3>* initial = nullptr);
+                                const std::vector<Vec3>* initial = nullptr, double landingTolerance = 0.02);
 
 // Substeps that bring dt below safety * dtMax (at least 1).
 int safeSubsteps(double dt, double dtMax, double safety = 0.9);

@@ -130,6 +130,41 @@ TEST(Monitor, CatchesAnInstabilityThatSaturatesUnderTheFallsTolerance) {
   EXPECT_FALSE(stable.failure.has_value()) << stable.failure->message;
 }
 
+TEST(Monitor, ALandingsStepBoundsWhereTheCubeStartsToGainEnergy) {
+  // The cube (scenes/cube.toml: 8 vertices, soft springs whose own limit is some 0.1 s,
+  // restitution 1) lands at 17 m/s. A vertex put back on the ground after sinking up to v h
+  // behind it gains m g v h, and nothing dissipates it: landingStep is the step at which the
+  // deepest sink adds the monitor's 2 % of what the body has to spend. Below it every run passes;
+  // just above it (where a landing's phase sinks the vertices deep enough) runs fail.
+  const SceneDesc scene = loadScene(scenePath("cube"));
+  const Model model = buildModel(scene);
+  const World start(model, scene.integrator, scene.dt);
+  const double landing = landingStep(start, 0, MonitorLimits{}.energyTolerance);
+  EXPECT_NEAR(landing, 0.0233, 0.0005);  // 0.02 * 1570 J / (8 kg * 9.81 m/s^2 * 17.2 m/s)
+  const auto run = [&](double h) {
+    PathSettings s;
+    s.integrator = scene.integrator;
+    s.dt = h;
+    s.duration = scene.duration;
+    return tracePath(model, s);
+  };
+  for (double f : {0.5, 0.75, 0.95}) EXPECT_TRUE(run(f * landing).complete) << f << " of the landing's step";
+  int failed = 0;
+  for (int k = 0; k <= 10; ++k) {
+    const RunPath r = run((1.0 + 0.05 * k) * landing);
+    if (!r.complete) {
+      ++failed;
+      EXPECT_NE(r.failure.find("total energy rose"), std::string::npos) << r.failure;
+    }
+  }
+  EXPECT_GE(failed, 1);
+  // The survey behind --substeps auto takes it: the mode's own limit is 4-5 times larger.
+  const StabilitySurvey survey = surveyStability(model, scene.integrator, scene.duration, 1.0 / 30, scene.dt, 1e-4);
+  EXPECT_TRUE(survey.landing);
+  EXPECT_LE(survey.dtMax, landing);
+  EXPECT_GT(survey.atRest, 4 * landing);
+}
+
 // A scene run with the adaptive step, frame by frame under the monitor.
 World runScene(const std::string& name, double tolerance, double duration, unsigned threads,
                std::vector<std::pair<double, double>>* steps = nullptr,

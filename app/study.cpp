@@ -711,7 +711,8 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "smallest; the substeps it gives at the scene's dt in brackets). The ratios: a proposal over the largest "
         "stable step (at most 1: it holds; at least 0.5: within a factor 2)."
         " The monitor measures a rise above a body's lowest energy against what the body had left to spend then "
-        "(sim/monitor.h; before, against its start's scale): the bunny at 3.5 ms, whose instability settles at "
+        "(sim/monitor.h, for the integrators whose energy only falls at a stable step, as RK4; before, and still "
+        "for the symplectic ones, against its start's scale): the bunny at 3.5 ms, whose instability settles at "
         "some 20 J, under 2 % of that scale (24 J), now fails at t = 0.13 s; at 3 ms it passes the monitor but "
         "keeps a jitter of some 1 J kinetic (0.001 J at 2.5 ms) and never comes to rest, which the rest criterion "
         "above catches. The survey also takes every body's landing step (sim/monitor.h landingStep: putting a "
@@ -822,7 +823,8 @@ int runStability(const StudyOptions& o) {
         "mode undamped and a mode as damped with no stiffness.\n"
      << "- Failed first: what the monitor reported just above the limit (nan, blow-up, energy).\n\n";
   md << "- Whole run: what `--substeps auto` proposes for the case, 0.9 of the survey's smallest limit (the stiffest "
-        "mode found along the run, sim/stability.h surveyStability, run from the case's released shape), over the "
+        "mode found along the run, sim/stability.h surveyStability, run from the case's released shape, or a "
+        "landing's step at the cases' energy tolerance of 100 %), over the "
         "largest stable dt (at most 1: it holds; at least 0.5: within a factor 2).\n\n";
   md << "| case | integrator | largest stable dt | predicted | 2/omega_max | measured / predicted | mode found | "
         "measured / found | whole run: proposed | / largest | failed first |\n"

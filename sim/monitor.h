@@ -88,6 +88,7 @@ class Monitor {
  private:
   MonitorLimits limits_;
   bool checkEnergy_;
+  bool lowestBased_;  // a rise from the lowest measured against what was left then (not the start's scale)
   std::vector<BodyRecord> records_;
   // Bodies that touch each other (sim/contact.h) pass energy between them: their energy is
   // checked as one sum, which nothing may raise.

@@ -64,7 +64,8 @@ double landingStep(const World& world, uint32_t body, double tolerance) {
   if (!(g > 0.0) || !support || !(info.mass > 0.0)) return std::numeric_limits<double>::infinity();
   double lowest = std::numeric_limits<double>::infinity();
   const std::vector<Vec3>& x = world.positions();
-  for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) lowest = std::min(lowest, dot(x[i], up));
+  for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i)
+    lowest = std::min(lowest, dot(x[i], up));
   const BodyMeasures m = measureBody(world, body);
   const double speed = std::sqrt(2.0 * m.kinetic / info.mass + 2.0 * g * std::max(0.0, lowest - *support));
   const double left = m.kinetic + m.elastic + info.mass * g * std::max(0.0, dot(m.centroid, up) - *support);
@@ -166,7 +167,8 @@ std::optional<Failure> Monitor::check(const World& world) {
       std::ostringstream s;
       s << "its total energy rose from " << reference << " J";
       if (limits_.energyFromLowest) s << " (its lowest, at t = " << r.lowestTotalTime << " s)";
-      s << " to " << m.total() << " J, more than " << allowed << " J, although nothing injects energy (the integration is unstable or too coarse)";
+      s << " to " << m.total() << " J, more than " << allowed
+        << " J, although nothing injects energy (the integration is unstable or too coarse)";
       return fail(s.str(), stepAdvice(info));
     }
     r.last = m;

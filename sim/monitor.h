@@ -40,7 +40,8 @@ struct BodyRecord {
   double lowestTotal = 0.0;   // [J] the lowest total energy so far, and when
   double lowestTotalTime = 0.0;
   double lowestSpendable = 0.0;  // [J] what it had left to spend then (as energyScale, measured
-                                 // at that moment): a rise above the lowest is measured against it
+                                 // at that moment, without the floor of its own size): a rise
+                                 // above the lowest is measured against it (Monitor::check)
   double maxStrain = 0.0;
   double maxPenetration = 0.0;
   double minVolumeRatio = 1.0, maxVolumeRatio = 1.0;

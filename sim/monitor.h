@@ -69,12 +69,13 @@ class RestWatch {
 
 // The step at which a landing adds the monitor's tolerance of energy: a vertex that lands at
 // speed v sinks about v h behind its support in a step, and being put back on it lifts it by as
-// much, m g v h for the body (nothing takes it back when the restitution is 1). Against
-// `tolerance` times what the body has left to spend (kinetic + elastic + its centroid's fall to
-// the lowest support, the monitor's measure): h = tolerance E / (M g v), v the speed it lands at
-// (from its kinetic energy and its lowest vertex's fall). The cube scene (restitution 1, dropped
-// 15 m): 0.0233 s, where its runs fail above 0.0231 s (docs/stability.md). Infinite without
-// gravity or colliders, or for a body at rest on its support.
+// much, m g v h for the body, while the bounce takes (1 - e^2) m v^2 / 2 (restitution e, the
+// most elastic collider's). Against `tolerance` times what the body has left to spend (kinetic +
+// elastic + its centroid's fall to the lowest support, the monitor's measure):
+// h = tolerance E / (M g v) + (1 - e^2) v / 2g, v the speed it lands at (from its kinetic energy
+// and its lowest vertex's fall). The cube scene (restitution 1, dropped 15 m): 0.0233 s, where
+// its runs fail from 0.0236 s (docs/stability.md). Infinite without gravity or colliders, or for
+// a body at rest on its support.
 double landingStep(const World& world, uint32_t body, double tolerance);
 
 class Monitor {

@@ -29,6 +29,13 @@ Vec3 upOf(const Model& model) {
   return g > 0.0 ? model.gravity / -g : Vec3{0, 1, 0};
 }
 
+// What a body has left to spend in the state m: kinetic + elastic + its centroid's fall to
+// `support` along `up` (at least leastFall) under gravity g.
+double energyLeft(const BodyInfo& info, const BodyMeasures& m, const Vec3& up, double g, double support,
+                  double leastFall) {
+  return m.kinetic + m.elastic + info.mass * g * std::max(leastFall, dot(m.centroid, up) - support);
+}
+
 // What a rise above the lowest total is measured against: what was left to spend at the lowest
 // (a body at rest on the ground: its fall to flat, m g times its centroid's height), never more
 // than the start's scale, and never below a millionth of it (round-off in the gravitational
@@ -68,7 +75,7 @@ double landingStep(const World& world, uint32_t body, double tolerance) {
     lowest = std::min(lowest, dot(x[i], up));
   const BodyMeasures m = measureBody(world, body);
   const double speed = std::sqrt(2.0 * m.kinetic / info.mass + 2.0 * g * std::max(0.0, lowest - *support));
-  const double left = m.kinetic + m.elastic + info.mass * g * std::max(0.0, dot(m.centroid, up) - *support);
+  const double left = energyLeft(info, m, up, g, *support, 0.0);
   if (!(speed > 0.0)) return std::numeric_limits<double>::infinity();
   // The bounce takes (1 - e^2) m v^2 / 2 from every vertex that lands, in the same step: the
   // gain m g v h shows as a rise only past h = (1 - e^2) v / 2g (e: the most elastic collider's).
@@ -116,8 +123,7 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
 }
 
 double Monitor::spendable(const BodyInfo& info, uint32_t body, const BodyMeasures& m, double leastFall) const {
-  const double fall = std::max(leastFall, dot(m.centroid, up_) - support_[body]);
-  return m.kinetic + m.elastic + info.mass * g_ * fall;
+  return energyLeft(info, m, up_, g_, support_[body], leastFall);
 }
 
 void Monitor::readAtOneInstant(const World& world, uint32_t body, BodyMeasures& m) {

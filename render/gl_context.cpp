@@ -123,15 +123,17 @@ GlContext::~GlContext() {
 }
 
 void GlContext::destroyFramebuffers() {
-  const unsigned fbos[] = {msFbo_, fbo_, sceneFbo_};
-  const unsigned rbs[] = {msColor_, msDepth_, color_, depth_, sceneDepth_};
+  const unsigned fbos[] = {msFbo_, fbo_, sceneFbo_, bgFbo_, bgFinalFbo_};
+  const unsigned rbs[] = {msColor_, msDepth_, color_, depth_, sceneDepth_, bgDepth_, bgFinalColor_, bgFinalDepth_};
   for (unsigned f : fbos)
     if (f) glDeleteFramebuffers(1, &f);
   for (unsigned r : rbs)
     if (r) glDeleteRenderbuffers(1, &r);
-  if (sceneColorTex_) glDeleteTextures(1, &sceneColorTex_);
+  for (unsigned t : {sceneColorTex_, bgColorTex_})
+    if (t) glDeleteTextures(1, &t);
   msFbo_ = msColor_ = msDepth_ = fbo_ = color_ = depth_ = 0;
   sceneFbo_ = sceneColorTex_ = sceneDepth_ = 0;
+  bgFbo_ = bgColorTex_ = bgDepth_ = bgFinalFbo_ = bgFinalColor_ = bgFinalDepth_ = 0;
 }
 
 void GlContext::makeCurrent() {
@@ -140,13 +142,42 @@ void GlContext::makeCurrent() {
     throw RenderError("GlContext: OSMesaMakeCurrent failed");
 }
 
+unsigned GlContext::drawFbo() const {
+  return target_ == SceneTarget::Msaa4 ? msFbo_ : target_ == SceneTarget::PostProcess ? sceneFbo_ : fbo_;
+}
+
 void GlContext::bindDrawTarget() {
-  const unsigned fbo = target_ == SceneTarget::Msaa4         ? msFbo_
-                       : target_ == SceneTarget::PostProcess ? sceneFbo_
-                                                              : fbo_;
-  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, drawFbo());
   glViewport(0, 0, width_, height_);
 }
+
+void GlContext::bindBackgroundTarget() {
+  if (target_ == SceneTarget::Msaa4) throw RenderError("GlContext: no cached background with a multisampled target");
+  if (!bgFbo_) makeTextureTarget(width_, height_, bgFbo_, bgColorTex_, bgDepth_);
+  glBindFramebuffer(GL_FRAMEBUFFER, bgFbo_);
+  glViewport(0, 0, width_, height_);
+}
+
+void GlContext::bindBackgroundFinalTarget() {
+  if (target_ != SceneTarget::PostProcess) throw RenderError("GlContext: an anti-aliased background needs PostProcess");
+  if (!bgFinalFbo_) makeTarget(width_, height_, 0, bgFinalFbo_, bgFinalColor_, bgFinalDepth_);
+  glBindFramebuffer(GL_FRAMEBUFFER, bgFinalFbo_);
+  glViewport(0, 0, width_, height_);
+}
+
+// The whole frame, same formats, no scaling and no scissor: llvmpipe copies the memory.
+void GlContext::copy(unsigned from, unsigned to, unsigned mask) {
+  if (!from) throw RenderError("GlContext: the cached background was never drawn");
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, from);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, to);
+  glBlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, mask, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, to);
+  glViewport(0, 0, width_, height_);
+}
+
+void GlContext::restoreBackground() { copy(bgFbo_, drawFbo(), GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT); }
+
+void GlContext::restoreBackgroundFinal() { copy(bgFinalFbo_, fbo_, GL_COLOR_BUFFER_BIT); }
 
 void GlContext::resolve() {
   if (target_ != SceneTarget::Msaa4) return;

@@ -37,6 +37,21 @@ public:
   void bindFinalTarget();
   // PostProcess: the scene colour texture (0 otherwise).
   unsigned sceneTexture() const { return sceneColorTex_; }
+
+  // A cached background: what the scene target holds before the frame's meshes go in (the
+  // renderer's sky and grounds, unchanged while the camera, the light and the grounds are), drawn
+  // once and copied into each frame. Plain and PostProcess only (a single-sample image cannot be
+  // copied into a multisampled one). The targets are created on first use.
+  // Binds the target the background is drawn into (colour texture + depth) and sets the viewport.
+  void bindBackgroundTarget();
+  unsigned backgroundTexture() const { return bgColorTex_; }
+  // PostProcess: binds the target for the background's anti-aliased image (colour + depth).
+  void bindBackgroundFinalTarget();
+  // Copies the background's colour and depth into the scene target, which is left bound.
+  void restoreBackground();
+  // PostProcess: copies the background's anti-aliased colour into the final framebuffer, which
+  // is left bound.
+  void restoreBackgroundFinal();
   // Reads the final framebuffer as RGBA8 into rgba (resized to width*height*4). topDown: row 0
   // is the top of the image (one extra copy); otherwise GL's bottom-up order, straight from
   // glReadPixels.
@@ -58,6 +73,10 @@ private:
   unsigned msFbo_ = 0, msColor_ = 0, msDepth_ = 0;  // multisampled target (AA on)
   unsigned fbo_ = 0, color_ = 0, depth_ = 0;        // final framebuffer (Plain: also the scene)
   unsigned sceneFbo_ = 0, sceneColorTex_ = 0, sceneDepth_ = 0;  // PostProcess scene target
+  unsigned bgFbo_ = 0, bgColorTex_ = 0, bgDepth_ = 0;           // cached background (scene)
+  unsigned bgFinalFbo_ = 0, bgFinalColor_ = 0, bgFinalDepth_ = 0;  // ... and anti-aliased
+  unsigned drawFbo() const;
+  void copy(unsigned from, unsigned to, unsigned mask);
 };
 
 }  // namespace springy::render

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <glm/gtc/type_ptr.hpp>
 #include <optional>
 #include <string>
 
@@ -113,6 +115,14 @@ struct Renderer::Impl {
   RenderTimings timings;
   // Per frame: the drawable meshes of each pass, in mesh order (kept to reuse their memory).
   std::vector<const GpuMesh*> opaque, grounds, translucent;
+  // The cached background (RenderSettings::cacheBackground): whether this frame starts from it,
+  // and what it was drawn with (backgroundKey); empty: never drawn.
+  bool fromBackground = false;
+  std::vector<float> backgroundDrawnWith;
+  // Per frame, with the background: the screen rectangle (pixels, bottom-up; lo inclusive, hi
+  // exclusive) of what the frame draws over it, or all of it.
+  glm::ivec2 changedLo{0}, changedHi{0};
+  bool changedAll = false;
   static SceneTarget targetFor(const RenderSettings& s) {
     if (!s.antiAlias) return SceneTarget::Plain;
     return s.antiAliasMethod == AntiAliasMethod::Msaa4 ? SceneTarget::Msaa4 : SceneTarget::PostProcess;
@@ -478,17 +488,9 @@ struct Renderer::Impl {
 
   // The scene target bound with a cleared depth buffer (LEQUAL), the shadow map on texture unit
   // 0, and the drawable meshes sorted into this frame's opaque, ground and translucent lists.
+  // With the cached background, the target starts as a copy of it (redrawn first if out of
+  // date); without, with a cleared depth buffer.
   void beginScene() {
-    ctx.bindDrawTarget();
-    glDisable(GL_DEPTH_TEST);
-    glDepthMask(GL_TRUE);
-    glClear(GL_DEPTH_BUFFER_BIT);
-    glDisable(GL_BLEND);
-    glDisable(GL_CULL_FACE);
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_LEQUAL);
-    glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, shadowTex);
     opaque.clear();
     grounds.clear();
     translucent.clear();
@@ -498,10 +500,70 @@ struct Renderer::Impl {
       else if (m.material.alpha < 1.0f) translucent.push_back(&m);
       else opaque.push_back(&m);
     }
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_SCISSOR_TEST);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_TRUE);
+    fromBackground = settings.cacheBackground && ctx.target() != SceneTarget::Msaa4;
+    changedLo = glm::ivec2(settings.width, settings.height);
+    changedHi = glm::ivec2(0);
+    changedAll = false;
+    if (fromBackground) {
+      std::vector<float> key = backgroundKey();
+      if (backgroundDrawnWith.empty() || key.size() != backgroundDrawnWith.size() ||
+          std::memcmp(key.data(), backgroundDrawnWith.data(), key.size() * sizeof(float)) != 0) {
+        drawBackground();
+        backgroundDrawnWith = std::move(key);
+      }
+      ctx.restoreBackground();
+    } else {
+      ctx.bindDrawTarget();
+      glClear(GL_DEPTH_BUFFER_BIT);
+    }
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, shadowTex);
+    mark(RenderPass::Background);
+  }
+
+  // Everything the background's pixels depend on: the camera, the light and ambient, the sky, and
+  // each ground's place and colours (its shadows are drawn per frame). Compared bit for bit.
+  std::vector<float> backgroundKey() const {
+    std::vector<float> k;
+    const auto put = [&k](const auto& v) {
+      const float* f = glm::value_ptr(v);
+      k.insert(k.end(), f, f + sizeof(v) / sizeof(float));
+    };
+    put(frameUniforms.viewProj);
+    put(light.direction), put(light.colour), put(frameUniforms.ambientSky), put(frameUniforms.ambientGround);
+    put(skyTop), put(skyBottom);
+    for (const GpuMesh* g : grounds) {
+      k.push_back(static_cast<float>(g - meshes.data()));
+      put(g->material.colour), put(g->groundB), put(g->groundOrigin), put(g->groundU), put(g->groundV);
+      k.insert(k.end(), {g->tile, g->extent, g->material.alpha});
+    }
+    return k;
+  }
+
+  // The grounds without what they receive, and the sky, into the background target; with FXAA
+  // also its anti-aliased image.
+  void drawBackground() {
+    ctx.bindBackgroundTarget();
+    glClear(GL_DEPTH_BUFFER_BIT);
+    for (const GpuMesh* g : grounds) drawGround(*g, false, false);
+    drawSky();
+    if (ctx.target() != SceneTarget::PostProcess) return;
+    ctx.bindBackgroundFinalTarget();
+    fxaa(ctx.backgroundTexture());
+    glEnable(GL_DEPTH_TEST);
   }
 
   void opaquePass(bool shadowsOn) {
-    for (const GpuMesh* m : opaque) drawMesh(shadowsOn, *m);
+    for (const GpuMesh* m : opaque) {
+      drawMesh(shadowsOn, *m);
+      changed(*m);
+    }
     mark(RenderPass::Opaque);
   }
 
@@ -511,13 +573,9 @@ struct Renderer::Impl {
   // drawn without them, then again with them inside the screen rectangle around that
   // footprint (the same vertices and depths: LEQUAL passes exactly where it was drawn); the
   // image is the same.
-  //
-  // A ground is pushed back in depth by a little (polygon offset): a cloth lying on the ground
-  // (its vertices on the plane, y = 0) would otherwise fight it for every pixel.
+  // With the cached background, the grounds are there already without what they receive: each is
+  // drawn again only where it receives shadows.
   void groundPass(bool shadowsOn) {
-    if (grounds.empty()) return;
-    glEnable(GL_POLYGON_OFFSET_FILL);
-    glPolygonOffset(1.0f, 4.0f);
     for (const GpuMesh* g : grounds) {
       // Contact shadows where some body's reach meets this ground on screen (none: unbounded).
       std::optional<glm::ivec4> contactRect;
@@ -530,11 +588,16 @@ struct Renderer::Impl {
           shadowsOn ? shadowFootprint(g->groundOrigin, g->groundU, g->groundV, light.direction, frameUniforms.lightVP,
                                       frameUniforms.viewProj, settings.width, settings.height)
                     : std::nullopt;
-      if ((shadowsOn && !rect) || (contact && !contactRect) || (!shadowsOn && !contact)) {
-        drawMesh(shadowsOn, *g, contact);  // everywhere, with all it needs
+      if (!shadowsOn && !contact) {
+        if (!fromBackground) drawGround(*g, false, false);
         continue;
       }
-      drawMesh(false, *g, false);
+      if ((shadowsOn && !rect) || (contact && !contactRect)) {
+        drawGround(*g, shadowsOn, contact);  // everywhere, with all it needs
+        changedAll = true;
+        continue;
+      }
+      if (!fromBackground) drawGround(*g, false, false);
       // Shadow taps and contact shadows inside the rectangle that holds both footprints (outside
       // the shadow map's, its taps return "lit"; outside the contact one, the occlusion is 0).
       glm::ivec2 lo(settings.width, settings.height), hi(0, 0);
@@ -546,11 +609,42 @@ struct Renderer::Impl {
       if (hi.x <= lo.x || hi.y <= lo.y) continue;  // both off screen
       glEnable(GL_SCISSOR_TEST);
       glScissor(lo.x, lo.y, hi.x - lo.x, hi.y - lo.y);
-      drawMesh(shadowsOn, *g, contact);
+      drawGround(*g, shadowsOn, contact);
       glDisable(GL_SCISSOR_TEST);
+      changed(glm::ivec4(lo, hi - lo));
     }
-    glDisable(GL_POLYGON_OFFSET_FILL);
     mark(RenderPass::Ground);
+  }
+
+  // A ground is pushed back in depth by a little (polygon offset): a cloth lying on the ground
+  // (its vertices on the plane, y = 0) would otherwise fight it for every pixel.
+  void drawGround(const GpuMesh& g, bool shadowsOn, bool contact) {
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.0f, 4.0f);
+    drawMesh(shadowsOn, g, contact);
+    glDisable(GL_POLYGON_OFFSET_FILL);
+  }
+
+  // Adds a screen rectangle (x, y, width, height; none: unbounded) to what this frame draws over
+  // the background.
+  void changed(const std::optional<glm::ivec4>& r) {
+    if (!r) {
+      changedAll = true;
+      return;
+    }
+    if ((*r)[2] <= 0 || (*r)[3] <= 0) return;
+    changedLo = glm::min(changedLo, glm::ivec2((*r)[0], (*r)[1]));
+    changedHi = glm::max(changedHi, glm::ivec2((*r)[0] + (*r)[2], (*r)[1] + (*r)[3]));
+  }
+
+  // A mesh's screen rectangle: its bounds' corners, widened by 2 pixels for rasterisation.
+  void changed(const GpuMesh& m) {
+    if (!fromBackground || changedAll) return;
+    glm::vec3 corners[8];
+    for (int k = 0; k < 8; ++k)
+      corners[k] = glm::vec3((k & 1) ? m.bounds.hi.x : m.bounds.lo.x, (k & 2) ? m.bounds.hi.y : m.bounds.lo.y,
+                             (k & 4) ? m.bounds.hi.z : m.bounds.lo.z);
+    changed(screenRect(corners, frameUniforms.viewProj, settings.width, settings.height, 2.0f));
   }
 
   // The screen rectangle where contact shadows can fall on ground g: every occluder's box of 2.5
@@ -574,7 +668,14 @@ struct Renderer::Impl {
 
   // The sky on the far plane, after the opaque meshes: early depth testing leaves out every
   // pixel something covers (they would be shaded twice otherwise).
+  // With the cached background it is there already.
   void skyPass() {
+    if (fromBackground) return;
+    drawSky();
+    mark(RenderPass::Sky);
+  }
+
+  void drawSky() {
     glDepthMask(GL_FALSE);
     use(skyProg);
     skyProg.set("uTop", skyTop);
@@ -583,7 +684,6 @@ struct Renderer::Impl {
     glBindVertexArray(emptyVao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glDepthMask(GL_TRUE);
-    mark(RenderPass::Sky);
   }
 
   // Translucent meshes back to front (by their bounds' centres), blended (premultiplied alpha).
@@ -610,6 +710,7 @@ struct Renderer::Impl {
       glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
       glDepthMask(GL_FALSE);
       drawMesh(shadowsOn, *m);
+      changed(*m);
     }
     glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);
@@ -618,34 +719,62 @@ struct Renderer::Impl {
 
   // Anti-aliasing into the final framebuffer: the MSAA resolve or the FXAA pass (none for a
   // Plain target, which is the final framebuffer already).
+  //
+  // With the cached background, FXAA runs only where this frame may differ from the background's
+  // own anti-aliased image, which is copied in first: within kFxaaReach pixels of what the frame
+  // drew over it. FXAA reads a pixel's diagonal neighbours and blends taps at most 4 pixels away
+  // (bilinear: 5), so every pixel farther out has the same inputs, and output, as in the
+  // background's image.
+  static constexpr int kFxaaReach = 6;
   void antiAliasPass() {
     glDisable(GL_DEPTH_TEST);
     ctx.resolve();
-    ctx.bindFinalTarget();
     if (ctx.target() == SceneTarget::PostProcess) {
-      glBindTexture(GL_TEXTURE_2D, ctx.sceneTexture());
-      glBindVertexArray(emptyVao);
-      const glm::vec2 texel(1.0f / static_cast<float>(settings.width), 1.0f / static_cast<float>(settings.height));
-      const auto fxaaPass = [&](Program& p) {
-        use(p);
-        p.set("uScene", 0);
-        p.set("uTexel", texel);
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-      };
-      // Every pixel's exact colour, and the edge pixels marked at depth 0 (the rest at 1).
-      glEnable(GL_DEPTH_TEST);
-      glDepthFunc(GL_ALWAYS);
-      glDepthMask(GL_TRUE);
-      fxaaPass(fxaaEdgeProg);
-      // The blend, at depth 0.5: passes only over the marked pixels.
-      glDepthFunc(GL_GREATER);
-      glDepthMask(GL_FALSE);
-      fxaaPass(fxaaProg);
-      glDepthMask(GL_TRUE);
-      glDepthFunc(GL_LEQUAL);
-      glDisable(GL_DEPTH_TEST);
+      if (!fromBackground) {
+        ctx.bindFinalTarget();
+        fxaa(ctx.sceneTexture());
+      } else {
+        ctx.restoreBackgroundFinal();
+        const glm::ivec2 lo = changedAll ? glm::ivec2(0) : glm::max(changedLo - kFxaaReach, glm::ivec2(0));
+        const glm::ivec2 hi = changedAll
+                                  ? glm::ivec2(settings.width, settings.height)
+                                  : glm::min(changedHi + kFxaaReach, glm::ivec2(settings.width, settings.height));
+        if (hi.x > lo.x && hi.y > lo.y) {
+          glEnable(GL_SCISSOR_TEST);
+          glScissor(lo.x, lo.y, hi.x - lo.x, hi.y - lo.y);
+          fxaa(ctx.sceneTexture());
+          glDisable(GL_SCISSOR_TEST);
+        }
+      }
+    } else {
+      ctx.bindFinalTarget();
     }
     if (ctx.target() != SceneTarget::Plain) mark(RenderPass::AntiAlias);
+  }
+
+  // FXAA of `source` into the bound target (within the scissor, if set). Leaves the depth test off.
+  void fxaa(GLuint source) {
+    glBindTexture(GL_TEXTURE_2D, source);
+    glBindVertexArray(emptyVao);
+    const glm::vec2 texel(1.0f / static_cast<float>(settings.width), 1.0f / static_cast<float>(settings.height));
+    const auto fxaaPass = [&](Program& p) {
+      use(p);
+      p.set("uScene", 0);
+      p.set("uTexel", texel);
+      glDrawArrays(GL_TRIANGLES, 0, 3);
+    };
+    // Every pixel's exact colour, and the edge pixels marked at depth 0 (the rest at 1).
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_ALWAYS);
+    glDepthMask(GL_TRUE);
+    fxaaPass(fxaaEdgeProg);
+    // The blend, at depth 0.5: passes only over the marked pixels.
+    glDepthFunc(GL_GREATER);
+    glDepthMask(GL_FALSE);
+    fxaaPass(fxaaProg);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LEQUAL);
+    glDisable(GL_DEPTH_TEST);
   }
 
   // The overlay goes on last, over the anti-aliased frame (its text is already smooth).
@@ -796,6 +925,7 @@ const char* passName(RenderPass pass) {
   switch (pass) {
     case RenderPass::Upload: return "upload";
     case RenderPass::Shadow: return "shadow map";
+    case RenderPass::Background: return "background";
     case RenderPass::Sky: return "sky";
     case RenderPass::Opaque: return "opaque meshes";
     case RenderPass::Ground: return "ground";

@@ -70,6 +70,12 @@ struct RenderSettings {
   // Contact shadows: every dynamic mesh (the first 16) darkens the ambient (and 3/4 of the direct
   // light) of the ground and the other meshes near it (analytic ellipsoid occlusion).
   bool contactShadows = true;
+  // Draw the sky and the grounds (without the shadows and contact shadows they receive) once, and
+  // copy that background into each frame while the camera, light, sky and grounds stay as they
+  // were; FXAA then runs only around what the frame adds (the meshes, the shadows on the
+  // grounds) and the rest comes from the background's anti-aliased copy. The image is the same
+  // either way (tests/render); off: every pass every frame. No effect with Msaa4.
+  bool cacheBackground = true;
   std::string fontPath = kDefaultFontPath;  // overlay font (loaded only if overlay text is set)
   float overlayPixelHeight = 0.0f;  // 0: height / 36, at least 12 px
   // Measure each pass (glFinish after each): fills RenderTimings::passMs. Costs a little speed
@@ -78,7 +84,9 @@ struct RenderSettings {
 };
 
 // The passes of one frame, in order, for RenderSettings::profilePasses.
-enum class RenderPass { Upload, Shadow, Opaque, Ground, Sky, Translucent, AntiAlias, Overlay, Count };
+// Background: the cached background copied in (or the depth buffer cleared), and the cache
+// redrawn when it is out of date.
+enum class RenderPass { Upload, Shadow, Background, Opaque, Ground, Sky, Translucent, AntiAlias, Overlay, Count };
 const char* passName(RenderPass pass);
 inline constexpr std::size_t kRenderPassCount = static_cast<std::size_t>(RenderPass::Count);
 

@@ -312,6 +312,88 @@ TEST(RenderScene, DynamicMeshFollowsPositions) {
   EXPECT_GT(r.timings().renderMs, 0.0);
 }
 
+// The cached background (RenderSettings::cacheBackground) changes no pixel: a ball moving over a
+// checkered ground, beside a static box and a translucent jelly, drawn frame by frame with the
+// cache and without, then after the camera, the light and the sky change in turn (each must
+// redraw the cache). With FXAA (run only around what a frame draws over the background: a
+// checker edge a few pixels from the ball blends with taps reaching into it), without, and with
+// MSAA (no cache).
+class CachedBackground : public ::testing::TestWithParam<Aa> {};
+
+// The frames of one of two scenes: `topDown` a slab moving over a checker seen from straight above
+// (its edges and the checker's lines run along the screen's rows and columns: where a checker line
+// meets the slab, FXAA just outside the slab's rectangle blends taps from inside it); otherwise a
+// box moving in perspective beside a static box and a translucent jelly, while the camera, the
+// light and the sky change in turn (each must redraw the cache).
+std::vector<std::vector<std::uint8_t>> cachedBackgroundFrames(Aa aa, bool cache, bool topDown) {
+  RenderSettings s = withAa(small(240, 136), aa);
+  s.cacheBackground = cache;
+  Renderer r(s);
+  Camera cam;
+  cam.position = topDown ? glm::vec3(0.0f, 5.0f, 0.0f) : glm::vec3(0.0f, 2.0f, 7.0f);
+  cam.target = topDown ? glm::vec3(0.0f) : glm::vec3(0.0f, 0.5f, 0.0f);
+  r.setCamera(cam);
+  Light slanted;
+  slanted.direction = {-1.0f, -0.8f, 0.2f};  // shadows fall beside the bodies
+  r.setLight(slanted);
+  r.addGround({0.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, 20.0f, {0.8f, 0.8f, 0.75f}, {0.3f, 0.35f, 0.4f},
+              topDown ? 0.5f : 0.15f);
+  if (!topDown) {
+    Material box;
+    box.colour = {0.4f, 0.6f, 0.9f};
+    r.addStaticMesh(makeBox({2.0f, 0.3f, -1.0f}, {1.5f, 0.3f, 1.0f}), box);
+    Material jelly;
+    jelly.colour = {0.9f, 0.2f, 0.6f};
+    jelly.alpha = 0.6f;
+    r.addStaticMesh(makeSphere({-2.0f, 0.6f, 0.5f}, 0.6f), jelly);
+  }
+  const MeshData body = makeBox({0.0f, 0.0f, 0.0f}, topDown ? glm::vec3(0.6f, 0.05f, 0.45f) : glm::vec3(0.5f));
+  Material red;
+  red.colour = {0.85f, 0.2f, 0.15f};
+  red.flat = true;
+  const MeshId id = r.addDynamicMesh(body.vertexCount(), body.indices, red);
+  std::vector<std::vector<std::uint8_t>> out;
+  for (int f = 0; f < 12; ++f) {
+    if (!topDown && f == 3) {
+      cam.position = {1.0f, 3.0f, 6.0f};
+      r.setCamera(cam);
+    } else if (!topDown && f == 4) {
+      Light light;
+      light.direction = {0.3f, -1.0f, -0.2f};
+      r.setLight(light);
+    } else if (!topDown && f == 5) {
+      r.setSky({0.36f, 0.56f, 0.84f}, {0.9f, 0.8f, 0.7f});  // the default top: only the bottom changes
+    }
+    std::vector<float> pos = body.positions;
+    const float x = -2.5f + 0.45f * static_cast<float>(f), y = topDown ? 0.5f : f % 2 ? 0.45f : 1.5f;
+    const float z = topDown ? 0.13f * static_cast<float>(f % 5) - 0.3f : 0.0f;
+    for (std::size_t i = 0; i < pos.size(); i += 3) pos[i] += x, pos[i + 1] += y, pos[i + 2] += z;
+    r.updateDynamicMesh(id, pos);
+    r.render();
+    out.emplace_back();
+    r.readPixels(out.back());
+  }
+  return out;
+}
+
+TEST_P(CachedBackground, GivesTheSameImageAsDrawingEverything) {
+  for (bool topDown : {false, true}) {
+    const auto cached = cachedBackgroundFrames(GetParam(), true, topDown);
+    const auto drawn = cachedBackgroundFrames(GetParam(), false, topDown);
+    for (std::size_t f = 0; f < cached.size(); ++f) {
+      std::size_t differ = 0;
+      for (std::size_t i = 0; i < cached[f].size(); ++i) differ += cached[f][i] != drawn[f][i];
+      EXPECT_EQ(differ, 0u) << (topDown ? "top down" : "perspective") << ", frame " << f;
+      if (f > 0) {
+        EXPECT_NE(cached[f], cached[f - 1]) << "frame " << f << " shows nothing new";
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(RenderScene, CachedBackground, ::testing::Values(Aa::None, Aa::Fxaa, Aa::Msaa),
+                         [](const ::testing::TestParamInfo<Aa>& i) { return aaName(i.param); });
+
 TEST(RenderScene, OverlayTextDrawsTopLeft) {
   RenderSettings s = small(256, 128);
   const glm::vec3 sky(0.5f);

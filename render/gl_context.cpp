@@ -165,19 +165,25 @@ void GlContext::bindBackgroundFinalTarget() {
   glViewport(0, 0, width_, height_);
 }
 
-// The whole frame, same formats, no scaling and no scissor: llvmpipe copies the memory.
-void GlContext::copy(unsigned from, unsigned to, unsigned mask) {
+// Same formats, no scaling and no scissor: llvmpipe copies the memory.
+void GlContext::copy(unsigned from, unsigned to, unsigned mask, int x0, int y0, int x1, int y1) {
   if (!from) throw RenderError("GlContext: the cached background was never drawn");
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, from);
-  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, to);
-  glBlitFramebuffer(0, 0, width_, height_, 0, 0, width_, height_, mask, GL_NEAREST);
+  if (x1 > x0 && y1 > y0) {
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, from);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, to);
+    glBlitFramebuffer(x0, y0, x1, y1, x0, y0, x1, y1, mask, GL_NEAREST);
+  }
   glBindFramebuffer(GL_FRAMEBUFFER, to);
   glViewport(0, 0, width_, height_);
 }
 
-void GlContext::restoreBackground() { copy(bgFbo_, drawFbo(), GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT); }
+void GlContext::restoreBackground(int x0, int y0, int x1, int y1) {
+  copy(bgFbo_, drawFbo(), GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT, x0, y0, x1, y1);
+}
 
-void GlContext::restoreBackgroundFinal() { copy(bgFinalFbo_, fbo_, GL_COLOR_BUFFER_BIT); }
+void GlContext::restoreBackgroundFinal(int x0, int y0, int x1, int y1) {
+  copy(bgFinalFbo_, fbo_, GL_COLOR_BUFFER_BIT, x0, y0, x1, y1);
+}
 
 void GlContext::resolve() {
   if (target_ != SceneTarget::Msaa4) return;

@@ -47,11 +47,12 @@ public:
   unsigned backgroundTexture() const { return bgColorTex_; }
   // PostProcess: binds the target for the background's anti-aliased image (colour + depth).
   void bindBackgroundFinalTarget();
-  // Copies the background's colour and depth into the scene target, which is left bound.
-  void restoreBackground();
+  // Copies the background's colour and depth into the scene target, which is left bound: the
+  // pixels x0 <= x < x1, y0 <= y < y1 (GL's bottom-up rows; empty: nothing is copied).
+  void restoreBackground(int x0, int y0, int x1, int y1);
   // PostProcess: copies the background's anti-aliased colour into the final framebuffer, which
-  // is left bound.
-  void restoreBackgroundFinal();
+  // is left bound (the same rectangle).
+  void restoreBackgroundFinal(int x0, int y0, int x1, int y1);
   // Reads the final framebuffer as RGBA8 into rgba (resized to width*height*4). topDown: row 0
   // is the top of the image (one extra copy); otherwise GL's bottom-up order, straight from
   // glReadPixels.
@@ -76,7 +77,7 @@ private:
   unsigned bgFbo_ = 0, bgColorTex_ = 0, bgDepth_ = 0;           // cached background (scene)
   unsigned bgFinalFbo_ = 0, bgFinalColor_ = 0, bgFinalDepth_ = 0;  // ... and anti-aliased
   unsigned drawFbo() const;
-  void copy(unsigned from, unsigned to, unsigned mask);
+  void copy(unsigned from, unsigned to, unsigned mask, int x0, int y0, int x1, int y1);
 };
 
 }  // namespace springy::render

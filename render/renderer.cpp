@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <glm/gtc/type_ptr.hpp>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -63,6 +64,19 @@ void checkTriangles(std::span<const std::uint32_t> tris, std::size_t vertexCount
 glm::vec3 toLinear(glm::vec3 c) { return srgbToLinear(c); }
 
 constexpr int kMaxOccluders = 16;  // MAX_OCCLUDERS in the mesh shader
+
+// The pixels lo <= p < hi (GL's bottom-up rows); empty when hi <= lo on an axis.
+struct PixelRect {
+  glm::ivec2 lo{std::numeric_limits<int>::max()}, hi{std::numeric_limits<int>::min()};
+  bool empty() const { return hi.x <= lo.x || hi.y <= lo.y; }
+  // The smallest rectangle holding this one and r.
+  void add(const PixelRect& r) {
+    if (r.empty()) return;
+    lo = glm::min(lo, r.lo);
+    hi = glm::max(hi, r.hi);
+  }
+  static PixelRect fromScissor(const glm::ivec4& r) { return {{r[0], r[1]}, {r[0] + r[2], r[1] + r[3]}}; }
+};
 
 // Area-weighted smooth vertex normals of a triangle mesh (unit; (0, 1, 0) where undefined).
 void smoothNormals(std::span<const glm::vec3> p, std::span<const std::uint32_t> tris, std::vector<glm::vec3>& normals) {
@@ -119,10 +133,12 @@ struct Renderer::Impl {
   // and what it was drawn with (backgroundKey); empty: never drawn.
   bool fromBackground = false;
   std::vector<float> backgroundDrawnWith;
-  // Per frame, with the background: the screen rectangle (pixels, bottom-up; lo inclusive, hi
-  // exclusive) of what the frame draws over it, or all of it.
-  glm::ivec2 changedLo{0}, changedHi{0};
+  // Per frame, with the background: the screen rectangle of what the frame draws over it, or
+  // all of it. And where the scene and final targets may differ from the background (what the
+  // last frame drew there), the only pixels the next frame copies back.
+  PixelRect changed;
   bool changedAll = false;
+  PixelRect sceneDirty, finalDirty;
   static SceneTarget targetFor(const RenderSettings& s) {
     if (!s.antiAlias) return SceneTarget::Plain;
     return s.antiAliasMethod == AntiAliasMethod::Msaa4 ? SceneTarget::Msaa4 : SceneTarget::PostProcess;
@@ -507,8 +523,7 @@ struct Renderer::Impl {
     glDepthFunc(GL_LEQUAL);
     glDepthMask(GL_TRUE);
     fromBackground = settings.cacheBackground && ctx.target() != SceneTarget::Msaa4;
-    changedLo = glm::ivec2(settings.width, settings.height);
-    changedHi = glm::ivec2(0);
+    changed = PixelRect{};
     changedAll = false;
     if (fromBackground) {
       std::vector<float> key = backgroundKey();
@@ -517,7 +532,7 @@ struct Renderer::Impl {
         drawBackground();
         backgroundDrawnWith = std::move(key);
       }
-      ctx.restoreBackground();
+      ctx.restoreBackground(sceneDirty.lo.x, sceneDirty.lo.y, sceneDirty.hi.x, sceneDirty.hi.y);
     } else {
       ctx.bindDrawTarget();
       glClear(GL_DEPTH_BUFFER_BIT);
@@ -549,6 +564,7 @@ struct Renderer::Impl {
   // The grounds without what they receive, and the sky, into the background target; with FXAA
   // also its anti-aliased image.
   void drawBackground() {
+    sceneDirty = finalDirty = whole();
     ctx.bindBackgroundTarget();
     glClear(GL_DEPTH_BUFFER_BIT);
     for (const GpuMesh* g : grounds) drawGround(*g, false, false);
@@ -562,7 +578,7 @@ struct Renderer::Impl {
   void opaquePass(bool shadowsOn) {
     for (const GpuMesh* m : opaque) {
       drawMesh(shadowsOn, *m);
-      changed(*m);
+      drawnOver(*m);
     }
     mark(RenderPass::Opaque);
   }
@@ -611,7 +627,7 @@ struct Renderer::Impl {
       glScissor(lo.x, lo.y, hi.x - lo.x, hi.y - lo.y);
       drawGround(*g, shadowsOn, contact);
       glDisable(GL_SCISSOR_TEST);
-      changed(glm::ivec4(lo, hi - lo));
+      changed.add({lo, hi});
     }
     mark(RenderPass::Ground);
   }
@@ -625,26 +641,22 @@ struct Renderer::Impl {
     glDisable(GL_POLYGON_OFFSET_FILL);
   }
 
-  // Adds a screen rectangle (x, y, width, height; none: unbounded) to what this frame draws over
-  // the background.
-  void changed(const std::optional<glm::ivec4>& r) {
-    if (!r) {
-      changedAll = true;
-      return;
-    }
-    if ((*r)[2] <= 0 || (*r)[3] <= 0) return;
-    changedLo = glm::min(changedLo, glm::ivec2((*r)[0], (*r)[1]));
-    changedHi = glm::max(changedHi, glm::ivec2((*r)[0] + (*r)[2], (*r)[1] + (*r)[3]));
-  }
+  PixelRect whole() const { return {{0, 0}, {settings.width, settings.height}}; }
 
-  // A mesh's screen rectangle: its bounds' corners, widened by 2 pixels for rasterisation.
-  void changed(const GpuMesh& m) {
+  // Adds a mesh's screen rectangle (its bounds' corners, widened by 2 pixels for rasterisation) to
+  // what this frame draws over the background.
+  void drawnOver(const GpuMesh& m) {
     if (!fromBackground || changedAll) return;
     glm::vec3 corners[8];
     for (int k = 0; k < 8; ++k)
       corners[k] = glm::vec3((k & 1) ? m.bounds.hi.x : m.bounds.lo.x, (k & 2) ? m.bounds.hi.y : m.bounds.lo.y,
                              (k & 4) ? m.bounds.hi.z : m.bounds.lo.z);
-    changed(screenRect(corners, frameUniforms.viewProj, settings.width, settings.height, 2.0f));
+    const std::optional<glm::ivec4> r =
+        screenRect(corners, frameUniforms.viewProj, settings.width, settings.height, 2.0f);
+    if (r)
+      changed.add(PixelRect::fromScissor(*r));
+    else
+      changedAll = true;  // unbounded: a corner behind the camera
   }
 
   // The screen rectangle where contact shadows can fall on ground g: every occluder's box of 2.5
@@ -710,7 +722,7 @@ struct Renderer::Impl {
       glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
       glDepthMask(GL_FALSE);
       drawMesh(shadowsOn, *m);
-      changed(*m);
+      drawnOver(*m);
     }
     glDisable(GL_CULL_FACE);
     glDepthMask(GL_TRUE);
@@ -721,29 +733,33 @@ struct Renderer::Impl {
   // Plain target, which is the final framebuffer already).
   //
   // With the cached background, FXAA runs only where this frame may differ from the background's
-  // own anti-aliased image, which is copied in first: within kFxaaReach pixels of what the frame
-  // drew over it. FXAA reads a pixel's diagonal neighbours and blends taps at most 4 pixels away
-  // (bilinear: 5), so every pixel farther out has the same inputs, and output, as in the
-  // background's image.
+  // own anti-aliased image, which is copied in first (where the last frame drew): within
+  // kFxaaReach pixels of what the frame drew over it. FXAA reads a pixel's diagonal neighbours
+  // and blends taps at most 4 pixels away (bilinear: 5), so every pixel farther out has the same
+  // inputs, and output, as in the background's image.
   static constexpr int kFxaaReach = 6;
   void antiAliasPass() {
     glDisable(GL_DEPTH_TEST);
     ctx.resolve();
+    if (fromBackground) sceneDirty = changedAll ? whole() : changed;
     if (ctx.target() == SceneTarget::PostProcess) {
       if (!fromBackground) {
         ctx.bindFinalTarget();
         fxaa(ctx.sceneTexture());
       } else {
-        ctx.restoreBackgroundFinal();
-        const glm::ivec2 lo = changedAll ? glm::ivec2(0) : glm::max(changedLo - kFxaaReach, glm::ivec2(0));
-        const glm::ivec2 hi = changedAll
-                                  ? glm::ivec2(settings.width, settings.height)
-                                  : glm::min(changedHi + kFxaaReach, glm::ivec2(settings.width, settings.height));
-        if (hi.x > lo.x && hi.y > lo.y) {
+        ctx.restoreBackgroundFinal(finalDirty.lo.x, finalDirty.lo.y, finalDirty.hi.x, finalDirty.hi.y);
+        PixelRect r = whole();
+        if (!changedAll) {
+          r.lo = glm::max(changed.lo - kFxaaReach, r.lo);
+          r.hi = glm::min(changed.hi + kFxaaReach, r.hi);
+        }
+        finalDirty = PixelRect{};
+        if (!r.empty()) {
           glEnable(GL_SCISSOR_TEST);
-          glScissor(lo.x, lo.y, hi.x - lo.x, hi.y - lo.y);
+          glScissor(r.lo.x, r.lo.y, r.hi.x - r.lo.x, r.hi.y - r.lo.y);
           fxaa(ctx.sceneTexture());
           glDisable(GL_SCISSOR_TEST);
+          finalDirty = r;
         }
       }
     } else {
@@ -785,6 +801,11 @@ struct Renderer::Impl {
     const float margin = std::max(4.0f, static_cast<float>(settings.height) / 90.0f);
     const float W = static_cast<float>(settings.width), H = static_cast<float>(settings.height);
     const float mx = std::round(margin), my = std::round(margin);
+    if (fromBackground) {  // the frame's pixels the overlay covers (rounded outwards)
+      const int x0 = static_cast<int>(mx), y1 = settings.height - static_cast<int>(my);
+      (ctx.target() == SceneTarget::Plain ? sceneDirty : finalDirty)
+          .add({{x0 - 1, y1 - overlayH - 1}, {x0 + overlayW + 1, y1 + 1}});
+    }
     use(overlayProg);
     overlayProg.set("uRect", glm::vec4(-1.0f + 2.0f * mx / W, 1.0f - 2.0f * my / H,
                                        -1.0f + 2.0f * (mx + static_cast<float>(overlayW)) / W,

@@ -369,6 +369,7 @@ std::vector<std::vector<std::uint8_t>> cachedBackgroundFrames(Aa aa, bool cache,
     const float z = topDown ? 0.13f * static_cast<float>(f % 5) - 0.3f : 0.0f;
     for (std::size_t i = 0; i < pos.size(); i += 3) pos[i] += x, pos[i + 1] += y, pos[i + 2] += z;
     r.updateDynamicMesh(id, pos);
+    r.setOverlayText({"frame " + std::string(static_cast<std::size_t>(f % 3 + 1), 'W')});  // as wide as it says
     r.render();
     out.emplace_back();
     r.readPixels(out.back());

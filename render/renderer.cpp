@@ -614,20 +614,30 @@ struct Renderer::Impl {
         continue;
       }
       if (!fromBackground) drawGround(*g, false, false);
-      // Shadow taps and contact shadows inside the rectangle that holds both footprints (outside
-      // the shadow map's, its taps return "lit"; outside the contact one, the occlusion is 0).
-      glm::ivec2 lo(settings.width, settings.height), hi(0, 0);
-      for (const std::optional<glm::ivec4>& r : {rect, contactRect}) {
-        if (!r || (*r)[2] <= 0 || (*r)[3] <= 0) continue;
-        lo = glm::min(lo, glm::ivec2((*r)[0], (*r)[1]));
-        hi = glm::max(hi, glm::ivec2((*r)[0] + (*r)[2], (*r)[1] + (*r)[3]));
-      }
-      if (hi.x <= lo.x || hi.y <= lo.y) continue;  // both off screen
+      // Shadow taps inside the shadow map's footprint (outside it they return "lit"), contact
+      // shadows inside the bodies' reach (outside it the occlusion is 0): both where the two
+      // rectangles meet, the contact shadows alone in the rest of theirs.
+      const PixelRect shadowed = shadowsOn && rect ? PixelRect::fromScissor(*rect) : PixelRect{};
+      const PixelRect reached = contact && contactRect ? PixelRect::fromScissor(*contactRect) : PixelRect{};
       glEnable(GL_SCISSOR_TEST);
-      glScissor(lo.x, lo.y, hi.x - lo.x, hi.y - lo.y);
-      drawGround(*g, shadowsOn, contact);
+      const auto drawIn = [&](const PixelRect& r, bool withShadows) {
+        if (r.empty()) return;
+        glScissor(r.lo.x, r.lo.y, r.hi.x - r.lo.x, r.hi.y - r.lo.y);
+        drawGround(*g, withShadows, contact);
+        changed.add(r);
+      };
+      drawIn(shadowed, true);
+      if (shadowed.empty()) {
+        drawIn(reached, false);
+      } else {  // the reach outside the footprint: below, above, left and right of it
+        const glm::ivec2 c0 = reached.lo, c1 = reached.hi, s0 = shadowed.lo, s1 = shadowed.hi;
+        const int y0 = std::max(c0.y, s0.y), y1 = std::min(c1.y, s1.y);
+        drawIn({c0, {c1.x, std::min(c1.y, s0.y)}}, false);
+        drawIn({{c0.x, std::max(c0.y, s1.y)}, c1}, false);
+        drawIn({{c0.x, y0}, {std::min(c1.x, s0.x), y1}}, false);
+        drawIn({{std::max(c0.x, s1.x), y0}, {c1.x, y1}}, false);
+      }
       glDisable(GL_SCISSOR_TEST);
-      changed.add({lo, hi});
     }
     mark(RenderPass::Ground);
   }

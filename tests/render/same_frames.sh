@@ -21,8 +21,12 @@ scenes=("$@")
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 mkdir "$out/before" "$out/after"
-"$before" frames "${scenes[@]}" --duration "$duration" -o "$out/before" >/dev/null
-"$after" frames "${scenes[@]}" --duration "$duration" -o "$out/after" >/dev/null
+for side in before after; do
+  binary=$before
+  [ "$side" = after ] && binary=$after
+  "$binary" frames "${scenes[@]}" --duration "$duration" -o "$out/$side" >"$out/$side.log" 2>&1 ||
+    { cat "$out/$side.log"; echo "$binary frames failed"; exit 1; }
+done
 count=0 differ=0
 for f in "$out"/before/*.png; do
   count=$((count + 1))

@@ -30,7 +30,8 @@ namespace springy {
 //   SPRINGY_RENDER_PROFILE=1  time each render pass (a glFinish after each, so a little slower)
 //                             and print the time per pass per frame in the closing summary.
 //   SPRINGY_RENDER_AA=msaa    anti-alias with 4x MSAA instead of FXAA (for comparisons).
-//   SPRINGY_X264_THREADS=N    x264's encoder threads (0: the codec's default, every core).
+//   SPRINGY_X264_THREADS=N    x264's encoder threads (0: the codec's default, every core;
+//                             unset: 1 on a machine of 2 cores or fewer, else 0).
 // A flag counts as set when it is non-empty and not "0".
 struct RenderEnvironment {
   bool serial = false;             // SPRINGY_RENDER_SERIAL

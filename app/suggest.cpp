@@ -185,12 +185,19 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
   const BodyStability& b = r.bodies.empty() ? BodyStability{} : r.bodies[r.limitingBody];
   const std::string& body = r.bodies.empty() ? path : model.bodies[r.limitingBody].name;
+  // Backward Euler with contact between bodies: the contact stage's limit (sim/stability.h).
+  const std::string contactNote =
+      !r.bodies.empty() && contactLimitedIntegrator(model, r.limitingBody, scene.integrator) != scene.integrator
+          ? " (the contact between bodies acts after the implicit solve, so the step is symplectic Euler's)"
+          : "";
   if (!(r.dtMax > 0.0) || !std::isfinite(b.omegaMax) || !std::isfinite(b.gammaMax)) {
     throw Error(path + ": body '" + body + "': its stiffest mode has no finite frequency (omega_max " +
                 std::to_string(b.omegaMax) + " rad/s, damping rate " + std::to_string(b.gammaMax) +
                 " 1/s): its mass, periods or spring constants are out of proportion");
   }
-  if (!std::isfinite(r.dtMax)) {
+  // Backward Euler without contact between bodies: no limit at rest, but `--substeps auto` still
+  // surveys the run for its landings (sim/monitor.h landingStep).
+  if (!std::isfinite(r.dtMax) && choice != StepChoice::AutoSubsteps) {
     if (choice == StepChoice::Default) {
       log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (the scene gives none; "
           << integratorName(scene.integrator) << " is stable at any step on these springs)\n";
@@ -214,25 +221,30 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
                   survey.failure);
     }
     scene.substeps = safeSubsteps(scene.dt, survey.dtMax, kSafety);
+    if (!std::isfinite(survey.dtMax)) {
+      log << "springy: " << path << ": --substeps auto: 1 (" << integratorName(scene.integrator)
+          << " is stable at any step on these springs, and no landing limits it)\n";
+      return;
+    }
     log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
         << "; estimated stable limit for " << integratorName(scene.integrator) << " over the whole run "
         << seconds(survey.dtMax) << ", at t = " << number(survey.time) << " s in body '"
-        << model.bodies[survey.body].name << "'"
-        << (survey.landing ? ", set by the energy its landing may add" : "") << "; at rest "
-        << seconds(survey.atRest) << ")\n";
+        << model.bodies[survey.body].name << "'" << (survey.landing ? ", set by the energy its landing may add" : "")
+        << "; at rest " << (std::isfinite(survey.atRest) ? seconds(survey.atRest) : std::string("any step")) << ")"
+        << contactNote << "\n";
   } else if (choice == StepChoice::Default) {
     const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
         << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << margin
         << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)
-        << " (body '" << body << "'), a margin for impacts\n";
+        << " (body '" << body << "'), a margin for impacts" << contactNote << "\n";
   } else if (stepSize(scene) > r.dtMax) {
     log << "springy: warning: " << path << ": the step " << seconds(stepSize(scene))
         << " exceeds the estimated stable limit " << seconds(r.dtMax) << " of " << integratorName(scene.integrator)
         << " (body '" << body << "': omega_max <= " << b.omegaMax << " rad/s, damping rate <= " << b.gammaMax
         << " 1/s, 2/omega_max = " << seconds(2.0 / b.omegaMax) << "). Use --substeps auto (" << needed
-        << " substeps), a smaller dt, or `springy suggest " << path << "`.\n";
+        << " substeps), a smaller dt, or `springy suggest " << path << "`." << contactNote << "\n";
   }
 }
 
@@ -256,8 +268,9 @@ int runSuggest(const SuggestOptions& options) {
       const BodyInfo& info = model.bodies[bi];
       const BodyDesc& desc = scene.bodies[bi];
       const std::vector<RowBound> rows = gershgorinRows(model, model.restPosition.data(), bi);
-      auto limit = [&](const ParameterScale& s) { return bodyStability(rows, scene.integrator, scene.duration, s).dtMax; };
-      const BodyStability now = bodyStability(rows, scene.integrator, scene.duration);
+      const Integrator limiting = contactLimitedIntegrator(model, bi, scene.integrator);
+      auto limit = [&](const ParameterScale& s) { return bodyStability(rows, limiting, scene.duration, s).dtMax; };
+      const BodyStability now = bodyStability(rows, limiting, scene.duration);
       std::printf("  body '%s' (%u vertices, %u struts, %u hinges%s)\n", info.name.c_str(), info.vertexCount,
                   info.strutCount, info.hingeCount, info.gasPressure > 0.0 ? ", gas" : "");
       std::printf("    omega_max <= %.4g rad/s (2/omega_max = %.4g s), damping rate <= %.4g 1/s\n", now.omegaMax,
@@ -266,6 +279,12 @@ int runSuggest(const SuggestOptions& options) {
         std::printf("    %s is unconditionally stable on these springs: any dt and parameters\n",
                     std::string(integratorName(scene.integrator)).c_str());
         continue;
+      }
+      if (limiting != scene.integrator) {
+        std::printf(
+            "    %s is stable at any step on these springs, but contact between bodies acts after its solve, "
+            "on single vertices: the step is %s's (sim/stability.h)\n",
+            std::string(integratorName(scene.integrator)).c_str(), std::string(integratorName(limiting)).c_str());
       }
       const int substeps = safeSubsteps(scene.dt, now.dtMax, kSafety);
       std::printf("    largest stable step with the current values: %.4g s -> %s (use dt <= %.4g s, or --substeps %d "

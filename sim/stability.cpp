@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/contact.h"
 #include "sim/hinge.h"
 #include "sim/monitor.h"
 
@@ -247,11 +248,20 @@ BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integr
   return out;
 }
 
+Integrator contactLimitedIntegrator(const Model& model, uint32_t body, Integrator integrator) {
+  if (integrator != Integrator::BackwardEuler || !BodyContacts::needed(model)) return integrator;
+  const auto actsOn = [](const BodyInfo& b) { return b.contact || b.selfContact; };
+  const bool acts =
+      body == kAnyBody ? std::any_of(model.bodies.begin(), model.bodies.end(), actsOn) : actsOn(model.bodies[body]);
+  return acts ? Integrator::SymplecticEuler : integrator;
+}
+
 StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x, Integrator integrator,
                                   double horizon) {
   StabilityReport report;
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
-    BodyStability s = bodyStability(gershgorinRows(model, x.data(), b), integrator, horizon);
+    BodyStability s =
+        bodyStability(gershgorinRows(model, x.data(), b), contactLimitedIntegrator(model, b, integrator), horizon);
     s.body = b;
     if (s.dtMax < report.dtMax) {
       report.dtMax = s.dtMax;
@@ -380,6 +390,7 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
   if (initial != nullptr) world.setState(*initial, world.velocities());
   Monitor monitor(world);
   ModeEstimator modes(world);
+  const Integrator limited = contactLimitedIntegrator(model, kAnyBody, integrator);
   const auto estimate = [&](bool always) {
     const double bound = estimateStability(model, world.positions(), integrator, duration).dtMax;
     const bool near = bound <= kNearest * survey.gershgorin;
@@ -387,7 +398,7 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
     if (!always && !near) return;
     const ModeEstimator::Rates rates =
         modes.estimate(world.positions(), survey.estimates == 0 ? kFirstIterations : kIterations);
-    const double h = ModeEstimator::step(integrator, rates, duration);
+    const double h = ModeEstimator::step(limited, rates, duration);
     if (++survey.estimates == 1) survey.atRest = h;
     if (h < survey.dtMax) {
       survey.dtMax = h;

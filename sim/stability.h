@@ -8,8 +8,8 @@
 // vertices j it shares a strut or hinge with (pinned neighbours drop out: they do not move).
 // A strut's block norm is k max(1, |1 - l0/l|) (its transverse stiffness when compressed), a
 // hinge's k |g_i| |g_j| with g the angle's gradient at the current shape; damping likewise with
-// d, plus the drag and deformation damping rates. Each row gives omega_i^2 and gamma_i; the integrator's stability on the
-// test mode x'' = -omega_i^2 x - gamma_i x' bounds its step.
+// d, plus the drag and deformation damping rates. Each row gives omega_i^2 and gamma_i; the integrator's stability on
+// the test mode x'' = -omega_i^2 x - gamma_i x' bounds its step.
 //
 // Stability of an integrator on that mode: the spectral radius rho(h) of its one-step
 // amplification matrix (computed by applying the integrator's own update to the 2x2 system;
@@ -18,7 +18,16 @@
 // energy over the run: symplectic and higher-order methods are stable below a sharp limit (2/omega for
 // symplectic Euler, Verlet and leapfrog, about 2.8/omega for RK4); explicit Euler, which
 // amplifies every undamped mode, gets the step at which the growth over the horizon stays
-// within that tolerance (so its limit shrinks as the run gets longer). Backward Euler is unconditionally stable on every linear mode.
+// within that tolerance (so its limit shrinks as the run gets longer). Backward Euler is unconditionally stable on
+// every linear mode.
+//
+// Backward Euler's step is bounded still where bodies touch each other: the contact stage
+// (sim/contact.h) acts after the implicit solve, on single vertices. Stopping a vertex over a
+// step h stores about 1/2 k (v h)^2 in its springs while taking 1/2 m v^2 of kinetic energy, a
+// gain once omega h passes about 1-2 on the mesh's stiff mode: on scenes/column.toml backward
+// Euler fails from 1 ms (omega h 2.2) and passes at 0.95 ms and below, where the stiffest mode
+// gives symplectic Euler 0.9 ms. So a body the contact stage acts on takes symplectic Euler's
+// limit under backward Euler (contactLimitedIntegrator).
 #pragma once
 
 #include <cstdint>
@@ -63,6 +72,11 @@ struct StabilityReport {
   double dtMax = std::numeric_limits<double>::infinity();  // over all bodies
   uint32_t limitingBody = 0;
 };
+
+// The integrator whose limit holds for `body` (every body: kAnyBody): symplectic Euler for
+// backward Euler when the contact stage acts on the body (above), else `integrator`.
+constexpr uint32_t kAnyBody = std::numeric_limits<uint32_t>::max();
+Integrator contactLimitedIntegrator(const Model& model, uint32_t body, Integrator integrator);
 
 // Spectral radius of the integrator's one-step map on x'' = -omega^2 x - gamma x'.
 double amplification(Integrator integrator, double omega, double gamma, double h);

@@ -73,8 +73,8 @@ struct StabilityReport {
   uint32_t limitingBody = 0;
 };
 
-// The integrator whose limit holds for `body` (every body: kAnyBody): symplectic Euler for
-// backward Euler when the contact stage acts on the body (above), else `integrator`.
+// The integrator whose limit holds for `body` (any body: kAnyBody): symplectic Euler for
+// backward Euler when the body touches another body or itself (above), else `integrator`.
 constexpr uint32_t kAnyBody = std::numeric_limits<uint32_t>::max();
 Integrator contactLimitedIntegrator(const Model& model, uint32_t body, Integrator integrator);
 

@@ -188,7 +188,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   // Backward Euler with contact between bodies: the contact stage's limit (sim/stability.h).
   const std::string contactNote =
       !r.bodies.empty() && contactLimitedIntegrator(model, r.limitingBody, scene.integrator) != scene.integrator
-          ? " (the contact between bodies acts after the implicit solve, so the step is symplectic Euler's)"
+          ? std::string(" (") + kContactLimitReason + ")"
           : "";
   if (!(r.dtMax > 0.0) || !std::isfinite(b.omegaMax) || !std::isfinite(b.gammaMax)) {
     throw Error(path + ": body '" + body + "': its stiffest mode has no finite frequency (omega_max " +
@@ -281,10 +281,8 @@ int runSuggest(const SuggestOptions& options) {
         continue;
       }
       if (limiting != scene.integrator) {
-        std::printf(
-            "    %s is stable at any step on these springs, but contact between bodies acts after its solve, "
-            "on single vertices: the step is %s's (sim/stability.h)\n",
-            std::string(integratorName(scene.integrator)).c_str(), std::string(integratorName(limiting)).c_str());
+        std::printf("    %s is stable at any step on these springs, but %s (sim/stability.h)\n",
+                    std::string(integratorName(scene.integrator)).c_str(), kContactLimitReason);
       }
       const int substeps = safeSubsteps(scene.dt, now.dtMax, kSafety);
       std::printf("    largest stable step with the current values: %.4g s -> %s (use dt <= %.4g s, or --substeps %d "

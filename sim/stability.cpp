@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "sim/contact.h"
 #include "sim/hinge.h"
 #include "sim/monitor.h"
 
@@ -249,10 +248,10 @@ BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integr
 }
 
 Integrator contactLimitedIntegrator(const Model& model, uint32_t body, Integrator integrator) {
-  if (integrator != Integrator::BackwardEuler || !BodyContacts::needed(model)) return integrator;
+  if (integrator != Integrator::BackwardEuler) return integrator;
   // Between bodies or within one. A single body's edges against triangle colliders' edges take
-  // the contact stage too, but only at a collider's rims: the impact case (a ball onto a plate)
-  // runs backward Euler at 0.1 s.
+  // the contact stage too (BodyContacts::needed), but only at a collider's rims: the impact case
+  // (a ball onto a plate) runs backward Euler at 0.1 s.
   const auto taking =
       std::count_if(model.bodies.begin(), model.bodies.end(), [](const BodyInfo& b) { return b.contact; });
   const auto actsOn = [&](const BodyInfo& b) { return b.selfContact || (b.contact && taking >= 2); };

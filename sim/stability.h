@@ -25,9 +25,10 @@
 // (sim/contact.h) acts after the implicit solve, on single vertices. Stopping a vertex over a
 // step h stores about 1/2 k (v h)^2 in its springs while taking 1/2 m v^2 of kinetic energy, a
 // gain once omega h passes about 1-2 on the mesh's stiff mode: on scenes/column.toml backward
-// Euler fails from 1 ms (omega h 2.2) and passes at 0.95 ms and below, where the stiffest mode
-// gives symplectic Euler 0.9 ms. So a body the contact stage acts on takes symplectic Euler's
-// limit under backward Euler (contactLimitedIntegrator).
+// Euler fails at 1.0-1.8 ms (omega h 2.2 and up) and passes at 0.8-0.95 ms, where the stiffest
+// mode gives symplectic Euler 0.9 ms. So a body that touches another body or itself takes
+// symplectic Euler's limit under backward Euler (contactLimitedIntegrator, and
+// kContactLimitReason for the messages that give it).
 #pragma once
 
 #include <cstdint>
@@ -77,6 +78,8 @@ struct StabilityReport {
 // backward Euler when the body touches another body or itself (above), else `integrator`.
 constexpr uint32_t kAnyBody = std::numeric_limits<uint32_t>::max();
 Integrator contactLimitedIntegrator(const Model& model, uint32_t body, Integrator integrator);
+inline constexpr const char* kContactLimitReason =
+    "the contact between bodies acts after the implicit solve, on single vertices, so the step is symplectic Euler's";
 
 // Spectral radius of the integrator's one-step map on x'' = -omega^2 x - gamma x'.
 double amplification(Integrator integrator, double omega, double gamma, double h);

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -709,7 +710,10 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "Proposed: 0.9 of the advisor's limit, from its estimate at t = 0 (at rest) or from the survey "
         "(`--substeps auto`: the same estimate made every dt along a run with the default adaptive step, its "
         "smallest; the substeps it gives at the scene's dt in brackets). The ratios: a proposal over the largest "
-        "stable step (at most 1: it holds; at least 0.5: within a factor 2)."
+        "stable step (at most 1: it holds; at least 0.5: within a factor 2). The last rows: two scenes of "
+        "bodies that meet, under backward Euler, whose step the contact between bodies limits (it acts after the "
+        "implicit solve; the advisor takes symplectic Euler's limit for such bodies, sim/stability.h "
+        "contactLimitedIntegrator)."
         " The monitor measures a rise above a body's lowest energy against what the body had left to spend then "
         "(sim/monitor.h, for the integrators whose energy only falls at a stable step, as RK4; before, and still "
         "for the symplectic ones, against its start's scale): the bunny at 3.5 ms, whose instability settles at "
@@ -725,8 +729,19 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "/ largest | survey's tightest: when, body | runs (wall) |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   csv << "scene,integrator,largest_stable_step,capped,rest_step,survey_step,survey_substeps,survey_time,runs,wall_seconds\n";
-  for (const std::string& path : scenesOrShowcase(o)) {
-    const SceneDesc scene = loadScene(path);
+  // The showcase scenes with their own integrator; then, unless scenes are named, two scenes of
+  // bodies that meet under backward Euler, whose step the contact between bodies limits
+  // (sim/stability.h contactLimitedIntegrator).
+  std::vector<std::pair<std::string, std::optional<Integrator>>> runsOf;
+  for (const std::string& path : scenesOrShowcase(o)) runsOf.emplace_back(path, std::nullopt);
+  if (o.scenes.empty()) {
+    for (const char* s : {"column", "head_on"}) {
+      runsOf.emplace_back((fs::path(SPRINGY_SCENES_DIR) / (std::string(s) + ".toml")).string(), Integrator::BackwardEuler);
+    }
+  }
+  for (const auto& [path, integrator] : runsOf) {
+    SceneDesc scene = loadScene(path);
+    if (integrator) scene.integrator = *integrator;
     const Model model = buildModel(scene);
     const std::string name = fs::path(path).stem().string();
     const auto start = std::chrono::steady_clock::now();

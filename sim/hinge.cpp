@@ -11,8 +11,12 @@
 
 namespace springy {
 
-bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g, double minLeverLeft,
-                   double minLeverRight) {
+namespace {
+
+// hingeGeometry and hingeGradient: the same operations, with or without the angle.
+template <bool kAngle>
+bool geometryOf(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g, double minLeverLeft,
+                double minLeverRight) {
   const Vec3 e = x1 - x0;
   const double l01 = length(e);
   if (!(l01 > 0.0)) return false;
@@ -27,7 +31,7 @@ bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x
   // second square root.
   const Vec3 nl = cross(h, rl) / lenL;
   const Vec3 nr = cross(rr, h) / lenR;
-  g.theta = std::atan2(dot(cross(nl, nr), h), dot(nl, nr));
+  if constexpr (kAngle) g.theta = std::atan2(dot(cross(nl, nr), h), dot(nl, nr));
   g.grad[2] = nl * (-1.0 / std::fmax(lenL, minLeverLeft));
   g.grad[3] = nr * (-1.0 / std::fmax(lenR, minLeverRight));
   g.grad[1] = (g.grad[2] * d02 + g.grad[3] * d03) * (-1.0 / l01);
@@ -35,6 +39,19 @@ bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x
   g.leverLeft = lenL;
   g.leverRight = lenR;
   return true;
+}
+
+}  // namespace
+
+bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g,
+                   double minLeverLeft, double minLeverRight) {
+  return geometryOf<true>(x0, x1, x2, x3, g, minLeverLeft, minLeverRight);
+}
+
+bool hingeGradient(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g,
+                   double minLeverLeft, double minLeverRight) {
+  g.theta = std::numeric_limits<double>::quiet_NaN();
+  return geometryOf<false>(x0, x1, x2, x3, g, minLeverLeft, minLeverRight);
 }
 
 double dihedralAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3) {

@@ -49,6 +49,11 @@ struct HingeGeometry {
 bool hingeGeometry(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g,
                    double minLeverLeft = 0.0, double minLeverRight = 0.0);
 
+// The gradient and lever arms alone, bit-identical to hingeGeometry's (theta: NaN), without
+// the angle's atan2: for the stability bounds (sim/stability.h gershgorinRows), which read no angle.
+bool hingeGradient(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, HingeGeometry& g,
+                   double minLeverLeft = 0.0, double minLeverRight = 0.0);
+
 // Signed dihedral angle alone (the same convention as hingeGeometry).
 double dihedralAngle(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3);
 

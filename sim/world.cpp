@@ -116,6 +116,7 @@ void World::updateStableStep() {
   const Integrator scheme = integrator_ == Integrator::AdaptiveVerlet ? Integrator::VelocityVerlet : integrator_;
   const double bound = estimateStability(*model_, x_, scheme, 1.0).dtMax;
   sinceStableUpdate_ = 0;
+  sinceStableTime_ = 0.0;
   if (!std::isfinite(bound)) {
     stableStep_ = std::numeric_limits<double>::infinity();
     return;
@@ -498,7 +499,14 @@ void World::accept(double h, double wanted, double factor, double error, bool af
     x[i] = xn[i];
     v[i] = vn[i];
   });
-  if (landed_ || ++sinceStableUpdate_ >= 4) updateStableStep();  // at the step's end shape
+  // Made again at the step's end shape, after 4 steps and 4 bound-steps of time: as often as
+  // every 4 steps while the steps are at the bound, less often while an impact or the tolerance
+  // keeps them far below it (a shape stiffens with time, not with steps; the bound's update was
+  // a third of an adaptive run).
+  ++sinceStableUpdate_;
+  sinceStableTime_ += h;
+  const bool due = sinceStableUpdate_ >= 4 && (!std::isfinite(stableStep_) || sinceStableTime_ >= 3.99 * stableStep_);
+  if (landed_ || due) updateStableStep();
 }
 
 double World::impactError(double h) const {

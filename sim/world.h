@@ -221,9 +221,9 @@ class World {
   bool restingAt(std::size_t i) const;
   // The adaptive step's stability bound: kStableFraction of the step its stiffest mode allows
   // (sim/stability.h, ModeEstimator), at the current shape: Gershgorin's bound, cheap, made again
-  // every few steps and at every stop, tracks the shape's stiffening, and the mode is found again
-  // when that bound has moved by a fifth (or every 64 updates); in between, the mode's step is
-  // scaled by the bound's change. Never below Gershgorin's own step.
+  // every few steps (and bound-steps of time) and at every stop, tracks the shape's stiffening,
+  // and the mode is found again when that bound has moved by a fifth (or every 64 updates); in between, the mode's step
+  // is scaled by the bound's change. Never below Gershgorin's own step.
   void updateStableStep();
   std::unique_ptr<Model> model_;  // on the heap: Forces keeps its address across moves of the World
   Integrator integrator_;
@@ -246,6 +246,7 @@ class World {
   double hNext_ = 0.0;                   // the controller's next step [s]
   double stableStep_ = 0.0;              // its stability bound [s] (updateStableStep)
   int sinceStableUpdate_ = 0;            // accepted steps since it was made
+  double sinceStableTime_ = 0.0;         // and their time [s]
   std::unique_ptr<ModeEstimator> modes_;  // the stiffest mode, found again when the bound moves
   double modeStep_ = 0.0;                // the step it allows [s]
   double boundAtMode_ = 0.0;             // Gershgorin's step when it was found [s]

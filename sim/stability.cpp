@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Dense>
+
 #include "sim/hinge.h"
 #include "sim/monitor.h"
 
@@ -319,55 +321,134 @@ ModeEstimator::ModeEstimator(const Forces& forces) : forces_(forces) {
   }
 }
 
-double ModeEstimator::iterate(const std::vector<Vec3>& x, bool damping, std::vector<Vec3>& u, int iterations) {
+namespace {
+
+double dotAll(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) sum += dot(a[i], b[i]);
+  return sum;
+}
+
+}  // namespace
+
+void ModeEstimator::product(const std::vector<Vec3>& x, bool damping, const std::vector<Vec3>& u,
+                            std::vector<Vec3>& y) {
+  // y = M^-1/2 A M^-1/2 u with A = -df/dx (or -df/dv), as a central difference whose largest
+  // vertex displacement (or velocity) is epsilon.
   const std::size_t n = u.size();
-  const auto normalise = [&] {
-    double sum = 0.0;
-    for (const Vec3& p : u) sum += dot(p, p);
-    const double scale = sum > 0.0 ? 1.0 / std::sqrt(sum) : 0.0;
-    for (Vec3& p : u) p = p * scale;
-    return sum > 0.0;
-  };
-  if (!normalise()) return 0.0;  // every vertex pinned
-  double largest = 0.0, lambda = 0.0;
+  double largest = 0.0;
   for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, length(u[i]) * invSqrtMass_[i]);
-  for (int it = 0; it < iterations; ++it) {
-    // y = M^-1/2 A M^-1/2 u with A = -df/dx (or -df/dv), u scaled so no vertex moves beyond epsilon.
-    const double e = epsilon_ / std::max(largest, 1e-300);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3 d = u[i] * (invSqrtMass_[i] * e);
-      if (damping) {
-        plus_[i] = d;
-        minus_[i] = d * -1.0;
-      } else {
-        plus_[i] = x[i] + d;
-        minus_[i] = x[i] - d;
-      }
-    }
+  y.resize(n);
+  if (!(largest > 0.0)) {
+    std::fill(y.begin(), y.end(), Vec3{0, 0, 0});
+    return;
+  }
+  const double e = epsilon_ / largest;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 d = u[i] * (invSqrtMass_[i] * e);
     if (damping) {
-      forces_.evaluate(x.data(), plus_.data(), 0.0, fPlus_.data());
-      forces_.evaluate(x.data(), minus_.data(), 0.0, fMinus_.data());
+      plus_[i] = d;
+      minus_[i] = d * -1.0;
     } else {
-      forces_.evaluate(plus_.data(), zero_.data(), 0.0, fPlus_.data());
-      forces_.evaluate(minus_.data(), zero_.data(), 0.0, fMinus_.data());
+      plus_[i] = x[i] + d;
+      minus_[i] = x[i] - d;
     }
-    double rayleigh = 0.0;
-    largest = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Vec3 y = (fMinus_[i] - fPlus_[i]) * (invSqrtMass_[i] / (2.0 * e));
-      rayleigh += dot(u[i], y);
-      u[i] = y;
-    }
-    lambda = rayleigh;
-    if (!normalise()) return 0.0;
-    for (std::size_t i = 0; i < n; ++i) largest = std::max(largest, length(u[i]) * invSqrtMass_[i]);
+  }
+  if (damping) {
+    forces_.evaluate(x.data(), plus_.data(), 0.0, fPlus_.data());
+    forces_.evaluate(x.data(), minus_.data(), 0.0, fMinus_.data());
+  } else {
+    forces_.evaluate(plus_.data(), zero_.data(), 0.0, fPlus_.data());
+    forces_.evaluate(minus_.data(), zero_.data(), 0.0, fMinus_.data());
+  }
+  for (std::size_t i = 0; i < n; ++i) y[i] = (fMinus_[i] - fPlus_[i]) * (invSqrtMass_[i] / (2.0 * e));
+}
+
+namespace {
+
+// Scales u to unit length; false if it is zero (every vertex pinned) or not finite.
+bool normalise(std::vector<Vec3>& u) {
+  const double sum = dotAll(u, u);
+  if (!(sum > 0.0) || !std::isfinite(sum)) return false;
+  const double scale = 1.0 / std::sqrt(sum);
+  for (Vec3& p : u) p = p * scale;
+  return true;
+}
+
+}  // namespace
+
+double ModeEstimator::iterate(const std::vector<Vec3>& x, bool damping, std::vector<Vec3>& u, int iterations) {
+  // Power iteration: the damping matrix is positive semi-definite, so its largest eigenvalue is
+  // also its largest in magnitude, which the iteration finds.
+  if (!normalise(u)) return 0.0;
+  double lambda = 0.0;
+  for (int it = 0; it < iterations; ++it) {
+    product(x, damping, u, y_);
+    lambda = dotAll(u, y_);
+    u.swap(y_);
+    if (!normalise(u)) return std::isfinite(lambda) ? 0.0 : std::numeric_limits<double>::infinity();
   }
   return std::isfinite(lambda) ? std::max(lambda, 0.0) : std::numeric_limits<double>::infinity();
 }
 
+double ModeEstimator::lanczos(const std::vector<Vec3>& x, std::vector<Vec3>& u, int steps) {
+  // The stiffness matrix is indefinite where a body is compressed: a strut shorter than its rest
+  // length pulls its ends sideways (its geometric stiffness is negative), and a strut at a third
+  // of its rest length has a sideways eigenvalue twice its axial one in magnitude. Power
+  // iteration then converges to that negative end and missed the positive one (in bunny_light's
+  // landings its estimates swung between 3,000 and 17,000 rad/s from one frame to the next, and
+  // its too-long steps let the energy rise). Lanczos (Golub & Van Loan, Matrix Computations,
+  // 4th ed., section 10.1) finds both ends of the spectrum from the same products: the largest
+  // eigenvalue of the tridiagonal matrix of k steps is the largest Rayleigh quotient over the
+  // Krylov space, never below the power iteration's k-th. Fully reorthogonalised (k is small).
+  if (!normalise(u)) return 0.0;
+  const std::size_t n = u.size();
+  if (basis_.size() < static_cast<std::size_t>(steps)) basis_.resize(static_cast<std::size_t>(steps));
+  std::vector<double> alpha, beta;
+  basis_[0] = u;
+  int m = 0;
+  for (int j = 0; j < steps; ++j) {
+    const std::vector<Vec3>& q = basis_[static_cast<std::size_t>(j)];
+    product(x, false, q, y_);
+    const double a = dotAll(q, y_);
+    if (!std::isfinite(a)) return std::numeric_limits<double>::infinity();
+    alpha.push_back(a);
+    m = j + 1;
+    for (int pass = 0; pass < 2; ++pass) {  // Gram-Schmidt twice against every basis vector
+      for (int i = 0; i <= j; ++i) {
+        const std::vector<Vec3>& v = basis_[static_cast<std::size_t>(i)];
+        const double c = dotAll(v, y_);
+        for (std::size_t k = 0; k < n; ++k) y_[k] -= v[k] * c;
+      }
+    }
+    const double b = std::sqrt(dotAll(y_, y_));
+    if (j + 1 == steps || !(b > 1e-12 * std::max(std::fabs(a), 1e-300))) break;  // or an invariant subspace
+    beta.push_back(b);
+    std::vector<Vec3>& next = basis_[static_cast<std::size_t>(j + 1)];
+    next.resize(n);
+    for (std::size_t k = 0; k < n; ++k) next[k] = y_[k] * (1.0 / b);
+  }
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(m, m);
+  for (int i = 0; i < m; ++i) {
+    t(i, i) = alpha[static_cast<std::size_t>(i)];
+    if (i + 1 < m) t(i, i + 1) = t(i + 1, i) = beta[static_cast<std::size_t>(i)];
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(t);
+  if (solver.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
+  const double theta = solver.eigenvalues()(m - 1);  // ascending
+  // The next call starts from this mode's Ritz vector.
+  const Eigen::VectorXd s = solver.eigenvectors().col(m - 1);
+  std::fill(u.begin(), u.end(), Vec3{0, 0, 0});
+  for (int i = 0; i < m; ++i) {
+    const std::vector<Vec3>& v = basis_[static_cast<std::size_t>(i)];
+    for (std::size_t k = 0; k < n; ++k) u[k] += v[k] * s(i);
+  }
+  return std::isfinite(theta) ? std::max(theta, 0.0) : std::numeric_limits<double>::infinity();
+}
+
 ModeEstimator::Rates ModeEstimator::estimate(const std::vector<Vec3>& x, int iterations) {
   Rates r;
-  r.omega = std::sqrt(iterate(x, false, stiff_, iterations));
+  r.omega = std::sqrt(lanczos(x, stiff_, iterations));
   r.gamma = iterate(x, true, damped_, iterations);
   probe_ = stiff_;
   r.stiffGamma = std::min(r.gamma, iterate(x, true, probe_, 1));  // one product: a Rayleigh quotient

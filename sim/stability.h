@@ -100,12 +100,12 @@ StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x
                                   double horizon);
 
 // The stiffest mode itself, not a bound on it: the largest eigenvalues of M^-1/2 K M^-1/2
-// (omega^2; K = -df/dx at zero velocity) and of M^-1/2 D M^-1/2 (gamma; D = -df/dv), by power
-// iteration on products with K and D taken as central differences of the force stages (two
-// force evaluations a product). Gershgorin's bound above is safe but loose, most of all for the
-// damping (single_sphere at rest: gamma 1382 1/s bounded, 392 1/s found; omega 331 against 218
-// rad/s). Power iteration approaches the largest eigenvalue from below; each call starts from the
-// last call's vectors, so along a run a few iterations follow the mode. Deterministic: the force
+// (omega^2; K = -df/dx at zero velocity) and of M^-1/2 D M^-1/2 (gamma; D = -df/dv), by Lanczos
+// (K, indefinite in a compressed body) and power iteration (D) on products taken as central
+// differences of the force stages (two force evaluations a product). Gershgorin's bound above is
+// safe but loose, most of all for the damping (single_sphere at rest: gamma 1382 1/s bounded, 392
+// 1/s found; omega 331 against 218 rad/s). Both approach the largest eigenvalue from below; each
+// call starts from the last call's mode, so along a run a few iterations follow it. Deterministic: the force
 // stages are bit-identical on any thread count and the sums here run in vertex order.
 class ModeEstimator {
  public:
@@ -127,10 +127,16 @@ class ModeEstimator {
   static double step(Integrator integrator, const Rates& rates, double horizon);
 
  private:
+  // y = the mass-normalised stiffness (or damping) times u, by central differences.
+  void product(const std::vector<Vec3>& x, bool damping, const std::vector<Vec3>& u, std::vector<Vec3>& y);
+  // Power iteration (the damping), and Lanczos (the stiffness, which can be indefinite); u: the
+  // start, and on return the mode found.
   double iterate(const std::vector<Vec3>& x, bool damping, std::vector<Vec3>& u, int iterations);
+  double lanczos(const std::vector<Vec3>& x, std::vector<Vec3>& u, int steps);
   const Forces& forces_;
   std::vector<double> invSqrtMass_;
-  std::vector<Vec3> stiff_, damped_, probe_, plus_, minus_, fPlus_, fMinus_, zero_;
+  std::vector<Vec3> stiff_, damped_, probe_, plus_, minus_, fPlus_, fMinus_, zero_, y_;
+  std::vector<std::vector<Vec3>> basis_;  // Lanczos's vectors
   double epsilon_;  // the differences' largest displacement [m] (or velocity [m/s])
 };
 

@@ -125,6 +125,24 @@ TEST(ModeEstimator, FindsTheStrutsModeOfTwoUnequalMasses) {
   EXPECT_NEAR(h * r.omega * 1.05, 2.0 * std::sqrt(2.0), 0.02);
 }
 
+TEST(ModeEstimator, FindsTheStiffestModeWhereCompressionMakesTheStiffnessIndefinite) {
+  // The strut at a third of its rest length: along it omega^2 = k (1/m0 + 1/m1); across it the
+  // spring pulls the ends sideways, an eigenvalue k (1 - L0/l) (1/m0 + 1/m1) = -2 k (1/m0 + 1/m1),
+  // twice as large in magnitude. Power iteration converged to that negative pair and reported no
+  // stiffness at all (omega 0: any step stable); the step must come from the axial mode.
+  const double k = 1000.0, m0 = 1.0, m1 = 3.0;
+  const Model model = test::strutModel(m0, m1, 1.0, k, 0.0, false);
+  std::vector<Vec3> x = model.restPosition;
+  x[1] = x[0] + (x[1] - x[0]) * (1.0 / 3.0);
+  const World world(model, Integrator::RK4, 1e-3);
+  ModeEstimator modes(world);
+  const ModeEstimator::Rates r = modes.estimate(x, 20);
+  EXPECT_NEAR(r.omega, std::sqrt(k * (1 / m0 + 1 / m1)), 1e-5 * std::sqrt(k * (1 / m0 + 1 / m1)));
+  // Warm-started at a shape that compresses no more, it follows the mode back.
+  const ModeEstimator::Rates atRest = modes.estimate(model.restPosition, 8);
+  EXPECT_NEAR(atRest.omega, std::sqrt(k * (1 / m0 + 1 / m1)), 1e-5 * atRest.omega);
+}
+
 TEST(ModeEstimator, NeverExceedsGershgorinsBoundAndIsSharperOnAMesh) {
   // A Rayleigh quotient lies below the largest eigenvalue, which lies below Gershgorin's bound; on
   // a damped icosphere the found rates are well inside the bound (the bound is loose there).

@@ -833,8 +833,8 @@ int runStability(const StudyOptions& o) {
      << "- Bound: 2/omega_max with omega_max the Gershgorin bound of the mass-normalised stiffness at t = 0 "
         "(sim/stability.h); predicted: the advisor's limit for that integrator (damping included; for explicit "
         "Euler the step at which the stiffest mode's energy doubles over the horizon).\n"
-     << "- Mode found: the step from the stiffest mode itself (power iteration on the mass-normalised stiffness "
-        "and damping, sim/stability.h ModeEstimator; what `--substeps auto` uses along a run), the smaller of the "
+     << "- Mode found: the step from the stiffest mode itself (Lanczos on the mass-normalised stiffness, power "
+        "iteration on the damping, sim/stability.h ModeEstimator; what `--substeps auto` uses along a run), the smaller of the "
         "mode undamped and a mode as damped with no stiffness.\n"
      << "- Failed first: what the monitor reported just above the limit (nan, blow-up, energy).\n\n";
   md << "- Whole run: what `--substeps auto` proposes for the case, 0.9 of the survey's smallest limit (the stiffest "

@@ -3,8 +3,8 @@
 # the integrators' error against run time before and through contact, and their largest stable
 # steps on stiff and extreme cases.
 #   scripts/study.sh [BUILD_DIR]      (default: build; a Release build of the springy target)
-# Takes about 50 minutes on 2 cores (the contact study 29 min, 2026-12-03, and the stability study
-# 14 min alone, 2026-12-04, with its backward Euler rows; the accuracy study a few minutes). Run on an otherwise idle machine:
+# Takes about 35 minutes on 2 cores (2026-12-04: the contact study 16.5 min and the stability study
+# 13 min, run side by side; the stability study alone 14 min; the accuracy study a few minutes). Run on an otherwise idle machine:
 # the wall times are measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."

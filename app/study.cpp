@@ -474,11 +474,16 @@ int runAccuracy(const StudyOptions& o) {
 
 // ---------------------------------------------------------------------------------------------
 // The scenes a study names, or else the eight showcase scenes.
+std::string bundledScene(const char* name) {
+  return (fs::path(SPRINGY_SCENES_DIR) / (std::string(name) + ".toml")).string();
+}
+
 std::vector<std::string> scenesOrShowcase(const StudyOptions& o) {
   if (!o.scenes.empty()) return o.scenes;
   std::vector<std::string> scenes;
-  for (const char* s : {"single_sphere", "spheres", "fixed_single_sphere", "cube", "ramp", "jelly", "bunny", "bunny_light"}) {
-    scenes.push_back((fs::path(SPRINGY_SCENES_DIR) / (std::string(s) + ".toml")).string());
+  for (const char* s :
+       {"single_sphere", "spheres", "fixed_single_sphere", "cube", "ramp", "jelly", "bunny", "bunny_light"}) {
+    scenes.push_back(bundledScene(s));
   }
   return scenes;
 }
@@ -735,9 +740,7 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
   std::vector<std::pair<std::string, std::optional<Integrator>>> runsOf;
   for (const std::string& path : scenesOrShowcase(o)) runsOf.emplace_back(path, std::nullopt);
   if (o.scenes.empty()) {
-    for (const char* s : {"column", "head_on"}) {
-      runsOf.emplace_back((fs::path(SPRINGY_SCENES_DIR) / (std::string(s) + ".toml")).string(), Integrator::BackwardEuler);
-    }
+    for (const char* s : {"column", "head_on"}) runsOf.emplace_back(bundledScene(s), Integrator::BackwardEuler);
   }
   for (const auto& [path, integrator] : runsOf) {
     SceneDesc scene = loadScene(path);
@@ -834,8 +837,8 @@ int runStability(const StudyOptions& o) {
         "(sim/stability.h); predicted: the advisor's limit for that integrator (damping included; for explicit "
         "Euler the step at which the stiffest mode's energy doubles over the horizon).\n"
      << "- Mode found: the step from the stiffest mode itself (Lanczos on the mass-normalised stiffness, power "
-        "iteration on the damping, sim/stability.h ModeEstimator; what `--substeps auto` uses along a run), the smaller of the "
-        "mode undamped and a mode as damped with no stiffness.\n"
+        "iteration on the damping, sim/stability.h ModeEstimator; what `--substeps auto` uses along a run), the "
+        "smaller of the mode undamped and a mode as damped with no stiffness.\n"
      << "- Failed first: what the monitor reported just above the limit (nan, blow-up, energy).\n\n";
   md << "- Whole run: what `--substeps auto` proposes for the case, 0.9 of the survey's smallest limit (the stiffest "
         "mode found along the run, sim/stability.h surveyStability, run from the case's released shape, or a "

@@ -4,8 +4,8 @@
 # steps on stiff and extreme cases.
 #   scripts/study.sh [BUILD_DIR]      (default: build; a Release build of the springy target)
 # Takes about 35 minutes on 2 cores (2026-12-04: the contact study 16.5 min and the stability study
-# 13 min, run side by side; the stability study alone 14 min; the accuracy study a few minutes). Run on an otherwise idle machine:
-# the wall times are measured.
+# 13 min, run side by side; the stability study alone 14 min; the accuracy study a few minutes).
+# Run on an otherwise idle machine: the wall times are measured.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${1:-build}"

@@ -404,7 +404,8 @@ double ModeEstimator::lanczos(const std::vector<Vec3>& x, std::vector<Vec3>& u, 
   if (!normalise(u)) return 0.0;
   const std::size_t n = u.size();
   if (basis_.size() < static_cast<std::size_t>(steps)) basis_.resize(static_cast<std::size_t>(steps));
-  std::vector<double> alpha, beta;
+  alpha_.clear();  // members: no allocation after the first call
+  beta_.clear();
   basis_[0] = u;
   int m = 0;
   for (int j = 0; j < steps; ++j) {
@@ -412,7 +413,7 @@ double ModeEstimator::lanczos(const std::vector<Vec3>& x, std::vector<Vec3>& u, 
     product(x, false, q, y_);
     const double a = dotAll(q, y_);
     if (!std::isfinite(a)) return std::numeric_limits<double>::infinity();
-    alpha.push_back(a);
+    alpha_.push_back(a);
     m = j + 1;
     for (int pass = 0; pass < 2; ++pass) {  // Gram-Schmidt twice against every basis vector
       for (int i = 0; i <= j; ++i) {
@@ -423,15 +424,15 @@ double ModeEstimator::lanczos(const std::vector<Vec3>& x, std::vector<Vec3>& u, 
     }
     const double b = std::sqrt(dotAll(y_, y_));
     if (j + 1 == steps || !(b > 1e-12 * std::max(std::fabs(a), 1e-300))) break;  // or an invariant subspace
-    beta.push_back(b);
+    beta_.push_back(b);
     std::vector<Vec3>& next = basis_[static_cast<std::size_t>(j + 1)];
     next.resize(n);
     for (std::size_t k = 0; k < n; ++k) next[k] = y_[k] * (1.0 / b);
   }
   Eigen::MatrixXd t = Eigen::MatrixXd::Zero(m, m);
   for (int i = 0; i < m; ++i) {
-    t(i, i) = alpha[static_cast<std::size_t>(i)];
-    if (i + 1 < m) t(i, i + 1) = t(i + 1, i) = beta[static_cast<std::size_t>(i)];
+    t(i, i) = alpha_[static_cast<std::size_t>(i)];
+    if (i + 1 < m) t(i, i + 1) = t(i + 1, i) = beta_[static_cast<std::size_t>(i)];
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> solver(t);
   if (solver.info() != Eigen::Success) return std::numeric_limits<double>::infinity();

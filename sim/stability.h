@@ -105,8 +105,9 @@ StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x
 // differences of the force stages (two force evaluations a product). Gershgorin's bound above is
 // safe but loose, most of all for the damping (single_sphere at rest: gamma 1382 1/s bounded, 392
 // 1/s found; omega 331 against 218 rad/s). Both approach the largest eigenvalue from below; each
-// call starts from the last call's mode, so along a run a few iterations follow it. Deterministic: the force
-// stages are bit-identical on any thread count and the sums here run in vertex order.
+// call starts from the last call's mode, so along a run a few iterations follow it.
+// Deterministic: the force stages are bit-identical on any thread count and the sums here run in
+// vertex order.
 class ModeEstimator {
  public:
   // Reads the model and evaluates its forces through `forces` (both must outlive this object).
@@ -137,6 +138,7 @@ class ModeEstimator {
   std::vector<double> invSqrtMass_;
   std::vector<Vec3> stiff_, damped_, probe_, plus_, minus_, fPlus_, fMinus_, zero_, y_;
   std::vector<std::vector<Vec3>> basis_;  // Lanczos's vectors
+  std::vector<double> alpha_, beta_;      // and its tridiagonal matrix
   double epsilon_;  // the differences' largest displacement [m] (or velocity [m/s])
 };
 

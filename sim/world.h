@@ -222,8 +222,8 @@ class World {
   // The adaptive step's stability bound: kStableFraction of the step its stiffest mode allows
   // (sim/stability.h, ModeEstimator), at the current shape: Gershgorin's bound, cheap, made again
   // every few steps (and bound-steps of time) and at every stop, tracks the shape's stiffening,
-  // and the mode is found again when that bound has moved by a fifth (or every 64 updates); in between, the mode's step
-  // is scaled by the bound's change. Never below Gershgorin's own step.
+  // and the mode is found again when that bound has moved by a factor 2 (or every 64 updates);
+  // in between, the mode's step is scaled by the bound's change. Never below Gershgorin's own step.
   void updateStableStep();
   std::unique_ptr<Model> model_;  // on the heap: Forces keeps its address across moves of the World
   Integrator integrator_;

@@ -31,12 +31,6 @@ void writeTraceRow(std::ostream& out, const std::string& scene, double t, const 
   out << scene << line;
 }
 
-// The mesh's index of a model vertex of body `info` (addBody renumbers them spatially).
-uint32_t meshVertex(const BodyInfo& info, uint32_t modelIndex) {
-  const auto it = std::find(info.modelVertex.begin(), info.modelVertex.end(), modelIndex);
-  return static_cast<uint32_t>(it - info.modelVertex.begin());
-}
-
 }  // namespace
 
 int runCheck(const CheckOptions& options) {
@@ -208,7 +202,7 @@ int runCheck(const CheckOptions& options) {
                       "body '%s' is not at rest at the end: in the last %.0f s its vertex %u (of the mesh) moved "
                       "over %.3g m, more than %.3g m (%.1f%% of its size); lengthen the scene or damp the body more "
                       "(strut_decay, hinge_decay, [environment] drag)",
-                      info.name.c_str(), RestWatch::kWindow, meshVertex(info, worst), moved,
+                      info.name.c_str(), RestWatch::kWindow, info.meshVertex(worst), moved,
                       RestWatch::kFraction * info.restSize, 100.0 * RestWatch::kFraction);
         failure = Failure{b, world.stepCount(), world.time(), what};
       }

@@ -31,6 +31,21 @@ std::string number(double x) {
   return buf;
 }
 
+// Which mode the survey's limit came from, and where it was: the user can look there (a sliver
+// triangle, a pinned corner, a stiff spot of the mesh).
+std::string limitingMode(const BodyInfo& info, const StabilitySurvey& survey) {
+  char buf[256];
+  const Vec3& p = survey.position;
+  std::snprintf(buf, sizeof buf,
+                ", set by its %s (%s %.3g %s) around its vertex %u (of the simulated mesh), then at "
+                "(%.3g, %.3g, %.3g) m",
+                survey.limit == ModeEstimator::Limit::Damping ? "most damped mode" : "stiffest mode",
+                survey.limit == ModeEstimator::Limit::Damping ? "rate" : "omega", survey.rate,
+                survey.limit == ModeEstimator::Limit::Damping ? "1/s" : "rad/s", info.meshVertex(survey.vertex), p.x,
+                p.y, p.z);
+  return buf;
+}
+
 // Smallest factor f in [lo, hi] with stable(f) true, assuming stable(hi) and monotonicity.
 template <class F>
 double smallestStable(F stable, double lo, double hi) {
@@ -229,7 +244,9 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
         << "; estimated stable limit for " << integratorName(scene.integrator) << " over the whole run "
         << seconds(survey.dtMax) << ", at t = " << number(survey.time) << " s in body '"
-        << model.bodies[survey.body].name << "'" << (survey.landing ? ", set by the energy its landing may add" : "")
+        << model.bodies[survey.body].name << "'"
+        << (survey.landing ? std::string(", set by the energy its landing may add")
+                           : limitingMode(model.bodies[survey.body], survey))
         << "; at rest " << (std::isfinite(survey.atRest) ? seconds(survey.atRest) : std::string("any step")) << ")"
         << contactNote << "\n";
   } else if (choice == StepChoice::Default) {

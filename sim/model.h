@@ -9,6 +9,7 @@
 // All bodies share one global vertex array; a body is a contiguous range of it.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -158,6 +159,11 @@ struct BodyInfo {
   // body (what one thread owns). modelVertex[k] is the global model index of the mesh's vertex
   // k; messages and scene keys (pins) speak of mesh indices.
   std::vector<uint32_t> modelVertex;
+  // The mesh's index of one of this body's model vertices (the inverse of modelVertex).
+  uint32_t meshVertex(uint32_t modelIndex) const {
+    const auto it = std::find(modelVertex.begin(), modelVertex.end(), modelIndex);
+    return static_cast<uint32_t>(it - modelVertex.begin());
+  }
 };
 
 // Wind: the air moves with velocity w(t) = base * (1 + gust(t)), gust a smooth seeded

@@ -453,7 +453,15 @@ ModeEstimator::Rates ModeEstimator::estimate(const std::vector<Vec3>& x, int ite
   r.gamma = iterate(x, true, damped_, iterations);
   probe_ = stiff_;
   r.stiffGamma = std::min(r.gamma, iterate(x, true, probe_, 1));  // one product: a Rayleigh quotient
-  // The body with the largest share of the stiff mode.
+  // The vertex with the largest share of a mode, among [begin, end).
+  const auto largest = [](const std::vector<Vec3>& u, uint32_t begin, uint32_t end) {
+    uint32_t best = begin;
+    for (uint32_t i = begin + 1; i < end; ++i) {
+      if (lengthSquared(u[i]) > lengthSquared(u[best])) best = i;
+    }
+    return best;
+  };
+  // The body with the largest share of the stiff mode, and its vertex with the largest.
   const Model& model = forces_.model();
   double best = -1.0;
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
@@ -464,21 +472,32 @@ ModeEstimator::Rates ModeEstimator::estimate(const std::vector<Vec3>& x, int ite
     }
     if (share > best) best = share, r.body = b;
   }
+  if (!model.bodies.empty()) {
+    const BodyInfo& info = model.bodies[r.body];
+    r.stiffVertex = largest(stiff_, info.firstVertex, info.firstVertex + info.vertexCount);
+  }
+  r.dampedVertex = largest(damped_, 0, static_cast<uint32_t>(damped_.size()));
   return r;
 }
 
-double ModeEstimator::step(Integrator integrator, const Rates& rates, double horizon) {
+double ModeEstimator::step(Integrator integrator, const Rates& rates, double horizon, Limit* limit) {
   constexpr double kShortfall = 1.05;
   const double omega = kShortfall * rates.omega, gamma = kShortfall * rates.gamma;
-  const double damped = std::min(criticalStep(integrator, omega, gamma, horizon),
-                                 criticalStep(integrator, 0.0, gamma, horizon));
-  // Explicit Euler amplifies every undamped mode at any step: only the damping keeps it stable,
-  // so the stiff mode is taken with its own damping (lowered by the margin, the safe side here).
+  // A mode as damped with no stiffness (the two rates need not belong to one mode).
+  const double damped = criticalStep(integrator, 0.0, gamma, horizon);
+  double stiff, withDamping;
   if (integrator == Integrator::ExplicitEuler) {
-    return std::min(criticalStep(integrator, omega, rates.stiffGamma / kShortfall, horizon),
-                    criticalStep(integrator, 0.0, gamma, horizon));
+    // Explicit Euler amplifies every undamped mode at any step: only the damping keeps it
+    // stable, so the stiff mode is taken with its own damping (lowered by the margin, the safe
+    // side here).
+    stiff = withDamping = criticalStep(integrator, omega, rates.stiffGamma / kShortfall, horizon);
+  } else {
+    stiff = criticalStep(integrator, omega, 0.0, horizon);
+    withDamping = criticalStep(integrator, omega, gamma, horizon);
   }
-  return std::min(damped, criticalStep(integrator, omega, 0.0, horizon));
+  const double h = std::min({stiff, withDamping, damped});
+  if (limit != nullptr) *limit = std::min(withDamping, damped) < stiff ? Limit::Damping : Limit::Stiffness;
+  return h;
 }
 
 StabilitySurvey surveyStability(const Model& model, Integrator integrator, double duration, double frame,
@@ -504,13 +523,19 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
     if (!always && !near) return;
     const ModeEstimator::Rates rates =
         modes.estimate(world.positions(), survey.estimates == 0 ? kFirstIterations : kIterations);
-    const double h = ModeEstimator::step(limited, rates, duration);
+    ModeEstimator::Limit limit{};
+    const double h = ModeEstimator::step(limited, rates, duration, &limit);
     if (++survey.estimates == 1) survey.atRest = h;
     if (h < survey.dtMax) {
+      const bool damping = limit == ModeEstimator::Limit::Damping;
       survey.dtMax = h;
       survey.time = world.time();
-      survey.body = rates.body;
+      survey.vertex = damping ? rates.dampedVertex : rates.stiffVertex;
+      survey.body = damping ? model.body[survey.vertex] : rates.body;
       survey.landing = false;
+      survey.limit = limit;
+      survey.rate = damping ? rates.gamma : rates.omega;
+      survey.position = world.positions()[survey.vertex];
     }
   };
   // At every frame: the step a landing allows (sim/monitor.h), for every method (backward Euler's

@@ -117,7 +117,12 @@ class ModeEstimator {
     double omega = 0, gamma = 0;  // [rad/s], [1/s]
     double stiffGamma = 0;        // the stiff mode's own damping rate (u^T D u, u that mode) [1/s]
     uint32_t body = 0;            // the body holding most of the stiff mode
+    // The vertices (model indices) with the largest share of the stiff and of the most damped
+    // mode: where each mode is.
+    uint32_t stiffVertex = 0, dampedVertex = 0;
   };
+  // What sets step(): the stiff mode, or the damping (without it the step would be longer).
+  enum class Limit { Stiffness, Damping };
   Rates estimate(const std::vector<Vec3>& x, int iterations);
   // The largest step of `integrator` stable on every mode with frequency up to omega and damping
   // rate up to gamma: the stiff mode as found, undamped (except for explicit Euler, which no
@@ -125,7 +130,7 @@ class ModeEstimator {
   // damping rate may belong to another mode, and the folded hinge case failed at 0.6 of the step
   // paired with it), and a mode as damped with no stiffness (the two rates need not belong to one
   // mode; margin: all raised by 5% for the iteration's shortfall).
-  static double step(Integrator integrator, const Rates& rates, double horizon);
+  static double step(Integrator integrator, const Rates& rates, double horizon, Limit* limit = nullptr);
 
  private:
   // y = the mass-normalised stiffness (or damping) times u, by central differences.
@@ -159,6 +164,12 @@ struct StabilitySurvey {
   uint32_t body = 0;                                        // and in which body
   uint32_t estimates = 0;                                   // mode estimates made
   bool landing = false;  // the smallest is a landing's (sim/monitor.h landingStep), not a mode's
+  // A mode's: which limit set it, its rate (omega [rad/s] or the damping rate [1/s]), and the
+  // vertex (model index) with the largest share of that mode, and where it was then.
+  ModeEstimator::Limit limit = ModeEstimator::Limit::Stiffness;
+  double rate = 0.0;
+  uint32_t vertex = 0;
+  Vec3 position;
   std::string failure;  // non-empty if the survey run itself failed (the limit then covers the run up to it)
 };
 // `initial`: the positions at t = 0 (null: the rest shape), as for a case released deformed.

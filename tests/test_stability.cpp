@@ -143,6 +143,36 @@ TEST(ModeEstimator, FindsTheStiffestModeWhereCompressionMakesTheStiffnessIndefin
   EXPECT_NEAR(atRest.omega, std::sqrt(k * (1 / m0 + 1 / m1)), 1e-5 * atRest.omega);
 }
 
+TEST(ModeEstimator, SaysWhereTheStiffAndTheDampedModesAre) {
+  // One vertex of the damped ball 1e4 times lighter than the rest: its struts, springs and
+  // dampers on a mass 1e-4 as large, make a mode of that vertex alone the stiffest and the most
+  // damped (omega^2 and the damping rate both scale with 1 / m). Two different vertices, so that
+  // neither answer can be a fixed index.
+  for (const CaseFactory& factory : stabilityCases()) {
+    if (factory.name != "stiff ball") continue;
+    for (const uint32_t light : {17u, 33u}) {
+      StabilityCase c = factory.make();
+      ASSERT_LT(light, c.model.mass.size());
+      c.model.mass[light] *= 1e-4;
+      c.model.invMass[light] = 1.0 / c.model.mass[light];
+      const World world(c.model, Integrator::RK4, 1e-5);
+      ModeEstimator modes(world);
+      const ModeEstimator::Rates r = modes.estimate(c.positions, 60);
+      EXPECT_EQ(r.stiffVertex, light);
+      EXPECT_EQ(r.dampedVertex, light);
+      // The step is the damping's (RK4 on a damping rate gamma: 2.79 / gamma) or the stiffness's,
+      // and the label says which: without the damping the step would be longer exactly when it is
+      // the damping's.
+      ModeEstimator::Limit limit{};
+      const double h = ModeEstimator::step(Integrator::RK4, r, 0.2, &limit);
+      const double undamped = ModeEstimator::step(Integrator::RK4, {r.omega, 0.0, 0.0}, 0.2);
+      EXPECT_EQ(limit == ModeEstimator::Limit::Damping, h < undamped) << h << " " << undamped;
+    }
+    return;
+  }
+  FAIL() << "no stiff ball case";
+}
+
 TEST(ModeEstimator, NeverExceedsGershgorinsBoundAndIsSharperOnAMesh) {
   // A Rayleigh quotient lies below the largest eigenvalue, which lies below Gershgorin's bound; on
   // a damped icosphere the found rates are well inside the bound (the bound is loose there).

@@ -119,6 +119,8 @@ TEST(Advice, SubstepsAutoMakesTheUnstableSceneRun) {
   const Result r = run("check " + kUnstable + " --duration 0.2 --substeps auto");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("--substeps auto: "), std::string::npos) << r.output;
+  // Stiff springs, little damping: the stiffness sets the step.
+  EXPECT_NE(r.output.find("set by its stiffest mode (omega "), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("exceeds the estimated"), std::string::npos) << r.output;
 }
 
@@ -134,6 +136,9 @@ TEST(Advice, SubstepsAutoHoldsThroughTheBunnysLanding) {
   ASSERT_NE(at, std::string::npos) << r.output;
   const int n = std::stoi(r.output.substr(at + 17));
   EXPECT_NE(r.output.find("over the whole run"), std::string::npos) << r.output;
+  // What sets it, and where (docs/stability.md: a hinge whose triangles have nearly collapsed).
+  EXPECT_NE(r.output.find("set by its most damped mode (rate "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" around its vertex "), std::string::npos) << r.output;
   for (const int fewer : {1, 3}) {
     const Result f = run(common + std::to_string(fewer));
     EXPECT_EQ(f.status, 1) << fewer << " substeps: " << f.output;

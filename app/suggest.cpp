@@ -52,14 +52,16 @@ std::string limitingMode(const BodyInfo& info, const StabilitySurvey& survey) {
 // another way through an impact and meet stiffer shapes than the survey saw (the bunny of
 // scenes/bunny_light.toml with the body material instead of its element keys: the survey's
 // tightest mode gave 20 substeps, at which the run fails at t = 1.63 s, as at 40; it passes at
-// 60). So `--substeps auto` tries its count: it runs the scene at it under the stability monitor,
-// as `springy check` does (the same steps and frames), and doubles the count after each failure.
-// Returns what the tries found, for the message ("" when the first passed).
-std::string tryTheSubsteps(const std::string& path, const Model& model, SceneDesc& scene, std::ostream& log) {
+// 60; its default step, 6 substeps, fails too, as do 12 and 24). So `--substeps auto` and the
+// default step try their count: the scene runs at it under the stability monitor, as `springy
+// check` runs it (the same steps and frames), and the count doubles after each failure. `what`
+// names the choice in messages. Returns what the tries found ("" when the first passed).
+std::string tryTheSubsteps(const std::string& path, const Model& model, SceneDesc& scene, const char* what,
+                           std::ostream& log) {
   constexpr int kDoublings = 5;
   std::string failed;
   for (int doubling = 0;; ++doubling) {
-    log << "springy: " << path << ": trying " << scene.substeps << " substeps over the whole run (--substeps auto)...\n"
+    log << "springy: " << path << ": trying " << scene.substeps << " substeps over the whole run (" << what << ")...\n"
         << std::flush;
     PathSettings s;
     s.integrator = scene.integrator;
@@ -70,7 +72,7 @@ std::string tryTheSubsteps(const std::string& path, const Model& model, SceneDes
     const RunPath run = tracePath(model, s);
     if (run.complete) return failed.empty() ? failed : "; the run failed at " + failed + " substeps";
     if (doubling == kDoublings || 2 * scene.substeps > kMaxSubsteps) {
-      throw Error(path + ": --substeps auto: the run fails even at " + std::to_string(scene.substeps) +
+      throw Error(path + ": " + what + ": the run fails even at " + std::to_string(scene.substeps) +
                   " substeps: " + run.failure);
     }
     char at[64];
@@ -271,7 +273,8 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
                   survey.failure);
     }
     scene.substeps = safeSubsteps(scene.dt, survey.dtMax, kSafety);
-    const std::string tried = std::isfinite(survey.dtMax) ? tryTheSubsteps(path, model, scene, log) : std::string();
+    const std::string tried =
+        std::isfinite(survey.dtMax) ? tryTheSubsteps(path, model, scene, "--substeps auto", log) : std::string();
     if (!std::isfinite(survey.dtMax)) {
       log << "springy: " << path << ": --substeps auto: 1 (" << integratorName(scene.integrator)
           << " is stable at any step on these springs, and no landing limits it)\n";
@@ -288,10 +291,12 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   } else if (choice == StepChoice::Default) {
     const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
+    const std::string tried = tryTheSubsteps(path, model, scene, "the default step", log);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
         << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << margin
         << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)
-        << " (body '" << body << "'), a margin for impacts" << contactNote << "\n";
+        << " (body '" << body << "'), a margin for impacts"
+        << (tried.empty() ? std::string() : " (" + tried.substr(2) + ")") << contactNote << "\n";
   } else if (stepSize(scene) > r.dtMax) {
     log << "springy: warning: " << path << ": the step " << seconds(stepSize(scene))
         << " exceeds the estimated stable limit " << seconds(r.dtMax) << " of " << integratorName(scene.integrator)

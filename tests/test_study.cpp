@@ -170,6 +170,23 @@ TEST(Advice, SubstepsAutoTriesItsCountOverTheWholeRun) {
   EXPECT_NE(f.output.find("total energy rose"), std::string::npos) << f.output;
 }
 
+// The same bunny with no step given: the advisor's default step (half its estimate at rest) fails
+// at the landing; it is tried and doubled like --substeps auto's count, and the run passes.
+TEST(Advice, TheDefaultStepIsTriedOverTheWholeRun) {
+  const std::string scene = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/app/bunny_body.toml";
+  const Result r = run("check " + scene + " --threads 1");
+  EXPECT_EQ(r.status, 0) << r.output;
+  const std::size_t failed = r.output.find("the run failed at ");
+  ASSERT_NE(failed, std::string::npos) << r.output;
+  const int first = std::stoi(r.output.substr(failed + 18));
+  const std::size_t given = r.output.find(" s / ");
+  ASSERT_NE(given, std::string::npos) << r.output;
+  EXPECT_GE(std::stoi(r.output.substr(given + 5)), 2 * first) << r.output;
+  const Result f = run("check " + scene + " --threads 1 --substeps " + std::to_string(first));
+  EXPECT_EQ(f.status, 1) << f.output;
+  EXPECT_NE(f.output.find("total energy rose"), std::string::npos) << f.output;
+}
+
 // Backward Euler is stable at any step on its springs, but the contact between bodies acts after
 // its solve, on single vertices (sim/stability.h): on the column the landing of the middle body
 // on the bottom one gains energy at 1 substep (2 ms, t = 0.3 s) and at 2 (t = 0.47 s). Before,

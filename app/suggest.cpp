@@ -54,10 +54,9 @@ std::string limitingMode(const BodyInfo& info, const StabilitySurvey& survey) {
 // tightest mode gave 20 substeps, at which the run fails at t = 1.63 s, as at 40; it passes at
 // 60; its default step, 6 substeps, fails too, as do 12 and 24). So `--substeps auto` and the
 // default step try their count: the scene runs at it under the stability monitor, as `springy
-// check` runs it (the same steps and frames), and the count doubles after each failure. `what`
+// check` runs it (the same model, steps and frames), and the count doubles after each failure. `what`
 // names the choice in messages. Returns what the tries found ("" when the first passed).
-std::string tryTheSubsteps(const std::string& path, const Model& model, SceneDesc& scene, const char* what,
-                           std::ostream& log) {
+std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char* what, std::ostream& log) {
   constexpr int kDoublings = 5;
   std::string failed;
   for (int doubling = 0;; ++doubling) {
@@ -69,7 +68,8 @@ std::string tryTheSubsteps(const std::string& path, const Model& model, SceneDes
     s.frame = 1.0 / scene.view.render.fps;
     s.duration = scene.duration;
     s.threads = defaultThreadCount();
-    const RunPath run = tracePath(model, s);
+    // The model as the run builds it: its resting speed for contacts follows the step.
+    const RunPath run = tracePath(buildModel(scene), s);
     if (run.complete) return failed.empty() ? failed : "; the run failed at " + failed + " substeps";
     if (doubling == kDoublings || 2 * scene.substeps > kMaxSubsteps) {
       throw Error(path + ": " + what + ": the run fails even at " + std::to_string(scene.substeps) +
@@ -274,7 +274,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     }
     scene.substeps = safeSubsteps(scene.dt, survey.dtMax, kSafety);
     const std::string tried =
-        std::isfinite(survey.dtMax) ? tryTheSubsteps(path, model, scene, "--substeps auto", log) : std::string();
+        std::isfinite(survey.dtMax) ? tryTheSubsteps(path, scene, "--substeps auto", log) : std::string();
     if (!std::isfinite(survey.dtMax)) {
       log << "springy: " << path << ": --substeps auto: 1 (" << integratorName(scene.integrator)
           << " is stable at any step on these springs, and no landing limits it)\n";
@@ -291,7 +291,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   } else if (choice == StepChoice::Default) {
     const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
-    const std::string tried = tryTheSubsteps(path, model, scene, "the default step", log);
+    const std::string tried = tryTheSubsteps(path, scene, "the default step", log);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
         << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << margin
         << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)

@@ -701,6 +701,13 @@ int runContact(const StudyOptions& o) {
 // sim/stability.h).
 constexpr double kSafetyFraction = 0.9;  // the advisor's (app/suggest.cpp)
 
+// The survey's tightest mode: which, its rate and the mesh vertex with its largest share.
+std::string modeWhere(const Model& model, const StabilitySurvey& survey) {
+  const bool damping = survey.limit == ModeEstimator::Limit::Damping;
+  return (damping ? "damping " + fmt("%.3g", survey.rate) + " 1/s" : "omega " + fmt("%.3g", survey.rate) + " rad/s") +
+         " at vertex " + std::to_string(model.bodies[survey.body].meshVertex(survey.vertex));
+}
+
 std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
   const int halvings = o.quick ? 3 : 5;
   std::ostringstream md;
@@ -715,7 +722,15 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "Proposed: 0.9 of the advisor's limit, from its estimate at t = 0 (at rest) or from the survey "
         "(`--substeps auto`: the same estimate made every dt along a run with the default adaptive step, its "
         "smallest; the substeps it gives at the scene's dt in brackets). The ratios: a proposal over the largest "
-        "stable step (at most 1: it holds; at least 0.5: within a factor 2). The last rows: two scenes of "
+        "stable step (at most 1: it holds; at least 0.5: within a factor 2). The survey's tightest mode: the "
+        "stiffest (omega) or the most damped (its rate), and the mesh vertex with its largest share. "
+        "`--substeps auto` then tries its count, running the scene at it under the monitor as `springy check` "
+        "does, and doubles it after each failure (app/suggest.cpp tryTheSubsteps): on these scenes the survey's "
+        "count passes at once (every ratio is at most 1). On the bunny of bunny_light with the body material (a "
+        "user's mesh given only a mass, tests/data/app/bunny_body.toml) it does not: the survey's run reaches "
+        "omega 24,000 rad/s at the landing and proposes 20 substeps (0.1 ms), but RK4 runs at fixed steps meet "
+        "stiffer shapes there (95,000 rad/s, around one vertex, along a run at 0.033 ms), fail at 0.1 and "
+        "0.05 ms and pass at 0.033 and 0.025 ms; the tries give 80 substeps. The last rows: two scenes of "
         "bodies that meet, under backward Euler, whose step the contact between bodies limits (it acts after the "
         "implicit solve; the advisor takes symplectic Euler's limit for such bodies, sim/stability.h "
         "contactLimitedIntegrator). What sets their step is the bending stiffness (measured on 2026-12-04 with "
@@ -748,7 +763,7 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "above that its runs pass or fail by a landing's phase (0.024-0.0275 and 0.031 s pass, 0.029 and 0.0333 "
         "s fail), so its largest stable step is the bisection's, not a clean edge.\n\n"
      << "| scene | integrator | largest stable step | at rest: proposed | / largest | survey: proposed (substeps) | "
-        "/ largest | survey's tightest: when, body | runs (wall) |\n"
+        "/ largest | survey's tightest: when, body, mode (or landing) | runs (wall) |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   csv << "scene,integrator,largest_stable_step,capped,rest_step,survey_step,survey_substeps,survey_time,runs,wall_seconds\n";
   // The showcase scenes with their own integrator; then, unless scenes are named, two scenes of
@@ -820,11 +835,11 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         << fmt("%.4g", restStep) << "," << fmt("%.4g", surveyStep) << "," << substeps << "," << survey.time << ","
         << runs << "," << fmt("%.1f", wall) << "\n";
     const auto ratio = [&](double h) { return capped ? "<= " + fmt("%.2f", h / lo) : fmt("%.2f", h / lo); };
-    md << "| " << name << " | " << integratorName(scene.integrator) << " | " << (capped ? ">= " : "")
-       << fmt("%.3g", lo) << " s | " << fmt("%.3g", restStep) << " s | " << ratio(restStep) << " | "
-       << fmt("%.3g", surveyStep) << " s (" << substeps << ") | " << ratio(surveyStep) << " | "
+    md << "| " << name << " | " << integratorName(scene.integrator) << " | " << (capped ? ">= " : "") << fmt("%.3g", lo)
+       << " s | " << fmt("%.3g", restStep) << " s | " << ratio(restStep) << " | " << fmt("%.3g", surveyStep) << " s ("
+       << substeps << ") | " << ratio(surveyStep) << " | "
        << (survey.failure.empty() ? "t = " + fmt("%.3g", survey.time) + " s, " + model.bodies[survey.body].name +
-                                        (survey.landing ? " (landing)" : "")
+                                        (survey.landing ? " (landing)" : ", " + modeWhere(model, survey))
                                   : "survey failed: " + survey.failure)
        << " | " << runs << " (" << fmt("%.0f", wall) << " s) |\n";
   }

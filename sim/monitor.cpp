@@ -54,8 +54,10 @@ std::string describe(const World& world, uint32_t body, const std::string& what,
 // What to try after an instability; a body with gas also has a volume_period to lengthen.
 std::string stepAdvice(const BodyInfo& body) {
   const bool own = body.membraneModulus > 0.0;  // the body material
-  return std::string("Try a smaller dt or more substeps (--substeps), a more stable integrator (rk4, verlet), or "
-                     "softer springs (longer ") +
+  return std::string(
+             "Try a smaller dt or more substeps (--substeps N, or --substeps auto: a count tried over the "
+             "whole run), an adaptive step (--tolerance 1e-4: it shortens its steps as the body stiffens), a "
+             "more stable integrator (rk4, verlet), or softer springs (longer ") +
          (own ? "stretch_period / bend_period" : "strut_period / hinge_period") +
          (body.gasPressure > 0.0 ? " / volume_period" : "") + "); `springy suggest` estimates a stable dt.";
 }

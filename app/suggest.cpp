@@ -273,13 +273,12 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
                   survey.failure);
     }
     scene.substeps = safeSubsteps(scene.dt, survey.dtMax, kSafety);
-    const std::string tried =
-        std::isfinite(survey.dtMax) ? tryTheSubsteps(path, scene, "--substeps auto", log) : std::string();
     if (!std::isfinite(survey.dtMax)) {
       log << "springy: " << path << ": --substeps auto: 1 (" << integratorName(scene.integrator)
           << " is stable at any step on these springs, and no landing limits it)\n";
       return;
     }
+    const std::string tried = tryTheSubsteps(path, scene, "--substeps auto", log);
     log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
         << "; estimated stable limit for " << integratorName(scene.integrator) << " over the whole run "
         << seconds(survey.dtMax) << ", at t = " << number(survey.time) << " s in body '"

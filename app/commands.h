@@ -52,11 +52,13 @@ struct FramesOptions {
 int runFrames(const FramesOptions& options);
 
 // The stability advisor on a loaded scene. Warn: warns when the step exceeds the estimated
-// stable limit. AutoSubsteps (--substeps auto): sets scene.substeps to a safe number. Default
-// (neither the scene nor the command line gave dt or substeps): the same with the margin
-// margin that holds through impacts (impactMargin, sim/setup.h). Both say what they chose.
+// stable limit. AutoSubsteps (--substeps auto): sets scene.substeps to the survey's count, tried
+// over the whole run and doubled or halved until it is within a factor 2 of the fewest that pass.
+// Default (neither the scene nor the command line gave dt or substeps): the estimate at rest with
+// the margin that holds through impacts (impactMargin, sim/setup.h), tried and doubled until it
+// passes. Both say what they chose. The tries run on `threads` threads.
 enum class StepChoice { Warn, AutoSubsteps, Default };
-void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, std::ostream& log);
+void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, unsigned threads, std::ostream& log);
 
 struct SuggestOptions {
   std::vector<std::string> scenes;

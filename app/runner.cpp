@@ -150,7 +150,7 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     const StepChoice choice = overrides.autoSubsteps ? StepChoice::AutoSubsteps
                               : !scene.stepGiven && !overrides.dt && !overrides.substeps ? StepChoice::Default
                                                                                          : StepChoice::Warn;
-    adviseTimeStep(path, scene, choice, std::cerr);
+    adviseTimeStep(path, scene, choice, overrides.threads ? *overrides.threads : defaultThreadCount(), std::cerr);
   }
   if (auto problem = runSettingsProblem(scene)) {
     throw Error(path + ": with the command line's settings, " + *problem);

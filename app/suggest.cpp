@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "sim/diagnostics.h"
 #include "sim/error.h"
+#include "sim/harness.h"
 #include "sim/limits.h"
 #include "sim/parallel.h"
 #include "sim/stability.h"
@@ -52,35 +53,69 @@ std::string limitingMode(const BodyInfo& info, const StabilitySurvey& survey) {
 // another way through an impact and meet stiffer shapes than the survey saw (the bunny of
 // scenes/bunny_light.toml with the body material instead of its element keys: the survey's
 // tightest mode gave 20 substeps, at which the run fails at t = 1.63 s, as at 40; it passes at
-// 60; its default step, 6 substeps, fails too, as do 12 and 24). So `--substeps auto` and the
+// 80; its default step, 6 substeps, fails too, as do 12 and 24). So `--substeps auto` and the
 // default step try their count: the scene runs at it under the stability monitor, as `springy
-// check` runs it (the same model, steps and frames), and the count doubles after each failure. `what`
-// names the choice in messages. Returns what the tries found ("" when the first passed).
-std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char* what, std::ostream& log) {
+// check` runs it (the same model, steps and frames), and the count doubles after each failure
+// (sim/harness.h searchCount). The estimate is the safe side of an edge that depends on the run
+// (bunny_light's survey gives 14 substeps, and 7 pass: docs/stability.md), so `--substeps auto`
+// (`searchUp`) also halves a count that passed until a run fails: the count it gives is within a
+// factor 2 of the fewest that pass. A larger step passes only if every body that came to rest at
+// the first passing count comes to rest at it too (an instability that saturates below the
+// monitor's energy tolerance keeps a body moving). The default step keeps its margin. `what`
+// names the choice in messages. Returns what the tries found ("" when the first passed alone).
+std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char* what, unsigned threads, bool searchUp,
+                           std::ostream& log) {
   constexpr int kDoublings = 5;
-  std::string failed;
-  for (int doubling = 0;; ++doubling) {
-    log << "springy: " << path << ": trying " << scene.substeps << " substeps over the whole run (" << what << ")...\n"
+  std::vector<bool> restsAtFirstPass;
+  std::string lastFailure;
+  const auto run = [&](int substeps) -> std::string {
+    log << "springy: " << path << ": trying " << substeps << " substeps over the whole run (" << what << ")...\n"
         << std::flush;
+    scene.substeps = substeps;
     PathSettings s;
     s.integrator = scene.integrator;
     s.dt = stepSize(scene);
     s.frame = 1.0 / scene.view.render.fps;
     s.duration = scene.duration;
-    s.threads = defaultThreadCount();
+    s.threads = threads;
     // The model as the run builds it: its resting speed for contacts follows the step.
-    const RunPath run = tracePath(buildModel(scene), s);
-    if (run.complete) return failed.empty() ? failed : "; the run failed at " + failed + " substeps";
-    if (doubling == kDoublings || 2 * scene.substeps > kMaxSubsteps) {
-      throw Error(path + ": " + what + ": the run fails even at " + std::to_string(scene.substeps) +
-                  " substeps: " + run.failure);
-    }
+    const Model model = buildModel(scene);
+    const RunPath r = tracePath(model, s);
     char at[64];
-    std::snprintf(at, sizeof at, "%s%d (after t = %.3g s)", failed.empty() ? "" : ", ", scene.substeps,
-                  run.times.empty() ? 0.0 : run.times.back());
-    failed += at;
-    scene.substeps *= 2;
+    std::snprintf(at, sizeof at, "after t = %.3g s", r.times.empty() ? 0.0 : r.times.back());
+    if (!r.complete) {
+      lastFailure = r.failure;
+      return at;
+    }
+    if (restsAtFirstPass.empty()) {
+      restsAtFirstPass = r.endsAtRest;
+      return "";
+    }
+    for (std::size_t b = 0; b < restsAtFirstPass.size(); ++b) {
+      if (restsAtFirstPass[b] && !r.endsAtRest[b]) return "body '" + model.bodies[b].name + "' never comes to rest";
+    }
+    return "";
+  };
+  const CountSearch found = searchCount(scene.substeps, kMaxSubsteps, kDoublings, searchUp, run);
+  if (found.count == 0) {
+    throw Error(path + ": " + what + ": the run fails even at " + std::to_string(found.tries.back().count) +
+                " substeps: " + lastFailure);
   }
+  scene.substeps = found.count;
+  if (found.tries.size() == 1) return "";
+  // "; the run failed at 20 (after t = 1.63 s), 40 (after t = 1.7 s) substeps, and passed at 80 substeps"
+  std::string said = "; the run ";
+  for (std::size_t i = 0; i < found.tries.size();) {
+    const bool passed = found.tries[i].failure.empty();
+    said += i > 0 ? ", and " : "";
+    said += passed ? "passed at " : "failed at ";
+    for (const std::size_t first = i; i < found.tries.size() && found.tries[i].failure.empty() == passed; ++i) {
+      said += (i > first ? ", " : "") + std::to_string(found.tries[i].count);
+      if (!passed) said += " (" + found.tries[i].failure + ")";
+    }
+    said += " substeps";
+  }
+  return said;
 }
 
 // Smallest factor f in [lo, hi] with stable(f) true, assuming stable(hi) and monotonicity.
@@ -232,7 +267,7 @@ void printSquash(const SceneDesc& scene, const Model& model, double keepVolume) 
 
 }  // namespace
 
-void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, std::ostream& log) {
+void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, unsigned threads, std::ostream& log) {
   const Model model = buildModel(scene);
   const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
   const BodyStability& b = r.bodies.empty() ? BodyStability{} : r.bodies[r.limitingBody];
@@ -264,25 +299,24 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     log << "springy: " << path << ": surveying the run for --substeps auto (" << integratorName(kDefaultAdaptive)
         << "; the stiffest mode found every frame and wherever the shape stiffens)...\n"
         << std::flush;
-    const StabilitySurvey survey =
-        surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps, scene.dt,
-                        scene.tolerance, defaultThreadCount());
+    const StabilitySurvey survey = surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps,
+                                                   scene.dt, scene.tolerance, threads);
     if (!survey.failure.empty()) {
       throw Error(path + ": --substeps auto: the survey run (" + std::string(integratorName(kDefaultAdaptive)) +
                   ", tolerance " + number(scene.tolerance) + ") failed, so no step can be advised: " +
                   survey.failure);
     }
-    scene.substeps = safeSubsteps(scene.dt, survey.dtMax, kSafety);
+    const int surveyed = scene.substeps = safeSubsteps(scene.dt, survey.dtMax, kSafety);
     if (!std::isfinite(survey.dtMax)) {
       log << "springy: " << path << ": --substeps auto: 1 (" << integratorName(scene.integrator)
           << " is stable at any step on these springs, and no landing limits it)\n";
       return;
     }
-    const std::string tried = tryTheSubsteps(path, scene, "--substeps auto", log);
+    const std::string tried = tryTheSubsteps(path, scene, "--substeps auto", threads, true, log);
     log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
-        << "; estimated stable limit for " << integratorName(scene.integrator) << " over the whole run "
-        << seconds(survey.dtMax) << ", at t = " << number(survey.time) << " s in body '"
-        << model.bodies[survey.body].name << "'"
+        << "; the survey's estimate of the stable limit for " << integratorName(scene.integrator)
+        << " over the whole run " << seconds(survey.dtMax) << " (" << surveyed
+        << " substeps), at t = " << number(survey.time) << " s in body '" << model.bodies[survey.body].name << "'"
         << (survey.landing ? std::string(", set by the energy its landing may add")
                            : limitingMode(model.bodies[survey.body], survey))
         << "; at rest " << (std::isfinite(survey.atRest) ? seconds(survey.atRest) : std::string("any step")) << ")"
@@ -290,7 +324,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   } else if (choice == StepChoice::Default) {
     const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
-    const std::string tried = tryTheSubsteps(path, scene, "the default step", log);
+    const std::string tried = tryTheSubsteps(path, scene, "the default step", threads, false, log);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
         << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << margin
         << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)

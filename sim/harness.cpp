@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sim/monitor.h"
 
@@ -45,6 +46,26 @@ RunOutcome runMonitored(const Model& model, Integrator integrator, double dt, do
   return out;
 }
 
+namespace {
+
+// `iterations` halvings in log dt of [lo, hi] (lo stable, hi not); the last failing run in `above`.
+template <class Run>
+double bisectStable(const Run& run, double lo, double hi, int iterations, RunOutcome& above) {
+  for (int i = 0; i < iterations; ++i) {
+    const double mid = std::sqrt(lo * hi);
+    RunOutcome r = run(mid);
+    if (r.stable) {
+      lo = mid;
+    } else {
+      hi = mid;
+      above = std::move(r);
+    }
+  }
+  return lo;
+}
+
+}  // namespace
+
 MeasuredStep largestStableStep(const Model& model, Integrator integrator, double horizon, double guess, double maxDt,
                                const std::vector<Vec3>* initialPositions, int iterations) {
   MeasuredStep out;
@@ -72,17 +93,51 @@ MeasuredStep largestStableStep(const Model& model, Integrator integrator, double
     }
   }
   out.above = std::move(atHi);
-  for (int i = 0; i < iterations; ++i) {
-    const double mid = std::sqrt(lo * hi);
-    RunOutcome r = run(mid);
-    if (r.stable) {
-      lo = mid;
-    } else {
-      hi = mid;
-      out.above = std::move(r);
+  out.dt = bisectStable(run, lo, hi, iterations, out.above);
+  return out;
+}
+
+CountSearch searchCount(int first, int maxCount, int doublings, bool halve,
+                        const std::function<std::string(int)>& run) {
+  CountSearch out;
+  const auto tryCount = [&](int n) {
+    out.tries.push_back({n, run(n)});
+    return out.tries.back().failure.empty();
+  };
+  int n = std::max(first, 1);
+  if (!tryCount(n)) {
+    for (int doubling = 1; doubling <= doublings && 2 * n <= maxCount; ++doubling) {
+      n *= 2;
+      if (tryCount(n)) {
+        out.count = n;  // n / 2 failed
+        return out;
+      }
     }
+    return out;
   }
-  out.dt = lo;
+  while (halve && n > 1 && tryCount((n + 1) / 2)) n = (n + 1) / 2;
+  out.count = n;
+  return out;
+}
+
+TriedStep triedStep(const Model& model, Integrator integrator, double horizon, double proposed, double maxDt,
+                    const std::vector<Vec3>* initialPositions, int iterations) {
+  auto run = [&](double dt) { return runMonitored(model, integrator, dt, horizon, initialPositions); };
+  TriedStep out;
+  MeasuredStep& m = out.largest;
+  double hi = INFINITY;  // the smallest failing step above the one given
+  const int first = static_cast<int>(std::min(std::ceil(maxDt / proposed), 1e9));
+  const CountSearch found = searchCount(first, std::numeric_limits<int>::max() / 2, 5, true, [&](int n) {
+    RunOutcome r = run(maxDt / n);
+    if (r.stable) return std::string();
+    if (maxDt / n < hi) hi = maxDt / n, m.above = r;
+    return r.failure.empty() ? std::string("unstable") : r.failure;
+  });
+  out.runs = static_cast<int>(found.tries.size());
+  if (found.count == 0) return out;
+  const double lo = out.dt = maxDt / found.count;
+  m.capped = found.count == 1;
+  m.dt = m.capped ? lo : bisectStable(run, lo, hi, iterations, m.above);
   return out;
 }
 

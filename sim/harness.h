@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -41,5 +42,34 @@ struct MeasuredStep {
 };
 MeasuredStep largestStableStep(const Model& model, Integrator integrator, double horizon, double guess, double maxDt,
                                const std::vector<Vec3>* initialPositions = nullptr, int iterations = 10);
+
+// The advisor's tries (`--substeps auto`, app/suggest.cpp; the stability study): an estimate's
+// step count is run over the whole horizon; after a failure the count doubles (at most
+// `doublings` times and up to maxCount); with `halve`, after a pass it halves (rounded up) until a
+// run fails or the count is 1. Then the count chosen passed, and half of it failed (or it is 1):
+// its step is within a factor 2 of the largest stable one wherever a smaller step is no less
+// stable.
+struct CountTry {
+  int count = 0;
+  std::string failure;  // what stopped the run; empty when it passed
+};
+struct CountSearch {
+  int count = 0;                // the count chosen; 0 when every count tried failed
+  std::vector<CountTry> tries;  // in the order run
+};
+// `run(count)` runs the whole horizon at that count: "" when it passes, else what stopped it.
+CountSearch searchCount(int first, int maxCount, int doublings, bool halve, const std::function<std::string(int)>& run);
+
+// The same tries on a case (the stability study): runs under the monitor as largestStableStep's
+// at steps maxDt / n, from the first n whose step is at most `proposed`; dt = 0 when every step
+// tried failed. Then `iterations` halvings (in log dt) of the bracket they leave, between the step
+// given and the smallest failing step above it: `largest` (capped when maxDt itself passed).
+struct TriedStep {
+  double dt = 0;
+  int runs = 0;  // the tries'
+  MeasuredStep largest;
+};
+TriedStep triedStep(const Model& model, Integrator integrator, double horizon, double proposed, double maxDt,
+                    const std::vector<Vec3>* initialPositions = nullptr, int iterations = 0);
 
 }  // namespace springy

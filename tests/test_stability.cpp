@@ -5,9 +5,10 @@
 #include <cmath>
 
 #include "fixtures.h"
-#include "sim/error.h"
 #include "sim/cases.h"
+#include "sim/error.h"
 #include "sim/harness.h"
+#include "sim/setup.h"
 #include "sim/stability.h"
 
 namespace springy {
@@ -218,6 +219,65 @@ TEST_P(PredictionVsMeasurement, WithinAFactorOfTwo) {
 
 INSTANTIATE_TEST_SUITE_P(StrutAndHinge, PredictionVsMeasurement,
                          ::testing::Combine(::testing::Values(0, 1, 2, 3), ::testing::ValuesIn(kExplicit)));
+
+// The tries (sim/harness.h searchCount) on a run that passes from 37 steps on: from above they
+// halve until a run fails, from below they double until one passes; either way the count given
+// passes and half of it (rounded up) fails, so its step is within a factor 2 of the largest.
+TEST(Tries, BracketTheFewestStepsThatPassWithinAFactorTwo) {
+  std::vector<int> ran;
+  const auto run = [&](int n) {
+    ran.push_back(n);
+    return n >= 37 ? std::string() : "fails at " + std::to_string(n);
+  };
+  CountSearch s = searchCount(100, 1000, 5, true, run);
+  EXPECT_EQ(s.count, 50);
+  EXPECT_EQ(ran, (std::vector<int>{100, 50, 25}));
+  EXPECT_EQ(s.tries.back().failure, "fails at 25");
+  ran.clear();
+  s = searchCount(10, 1000, 5, true, run);
+  EXPECT_EQ(s.count, 40);
+  EXPECT_EQ(ran, (std::vector<int>{10, 20, 40}));
+  ran.clear();
+  s = searchCount(100, 1000, 5, false, run);  // no halving: the first count that passes
+  EXPECT_EQ(s.count, 100);
+  EXPECT_EQ(ran, std::vector<int>{100});
+  ran.clear();
+  s = searchCount(3, 1000, 5, true, [&](int n) { return run(n + 34); });  // passes from 3 on: 3, 2 fail
+  EXPECT_EQ(s.count, 3);
+  EXPECT_EQ(ran, (std::vector<int>{37, 36}));
+  ran.clear();
+  s = searchCount(4, 20, 5, true, run);  // doubling stops at the most allowed: every count tried failed
+  EXPECT_EQ(s.count, 0);
+  EXPECT_EQ(ran, (std::vector<int>{4, 8, 16}));
+  ran.clear();
+  s = searchCount(5, 1000, 5, true, [&](int n) { return run(n + 100); });  // every count passes
+  EXPECT_EQ(s.count, 1);
+  EXPECT_EQ(ran, (std::vector<int>{105, 103, 102, 101}));
+}
+
+// The undamped ball under explicit Euler: the survey's proposal is four times below the largest
+// stable step (docs/stability.md: 0.24 of it); tried over the horizon as `--substeps auto` tries
+// it, the step given holds and is within a factor 2 of the largest stable step.
+TEST(Tries, BringTheSurveysStepWithinAFactorTwoOfTheLargest) {
+  for (const CaseFactory& factory : stabilityCases()) {
+    if (factory.name != "undamped") continue;
+    const StabilityCase c = factory.make();
+    const double horizon = 0.2;
+    const StabilitySurvey survey = surveyStability(c.model, Integrator::ExplicitEuler, horizon, horizon / 50, 0.0,
+                                                   SimulationDesc{}.tolerance, 1, &c.positions, kCaseEnergyTolerance);
+    const double proposed = 0.9 * survey.dtMax;
+    const MeasuredStep measured =
+        largestStableStep(c.model, Integrator::ExplicitEuler, horizon, proposed, 0.1, &c.positions, 6);
+    EXPECT_LT(proposed, 0.5 * measured.dt) << "proposed " << proposed << ", measured " << measured.dt;
+    const TriedStep tried = triedStep(c.model, Integrator::ExplicitEuler, horizon, proposed, 0.1, &c.positions);
+    EXPECT_LE(tried.dt, measured.dt * 1.01) << "tried " << tried.dt << ", measured " << measured.dt;
+    EXPECT_GE(tried.dt, 0.5 * measured.dt) << "tried " << tried.dt << ", measured " << measured.dt;
+    EXPECT_TRUE(runMonitored(c.model, Integrator::ExplicitEuler, tried.dt, horizon, &c.positions).stable);
+    EXPECT_FALSE(runMonitored(c.model, Integrator::ExplicitEuler, 2 * tried.dt, horizon, &c.positions).stable);
+    return;
+  }
+  FAIL() << "no undamped case";
+}
 
 TEST(Advisor, SafeSubstepsBringTheStepUnderTheLimit) {
   EXPECT_EQ(safeSubsteps(0.01, 0.02), 1);

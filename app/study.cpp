@@ -21,6 +21,7 @@
 #include "sim/error.h"
 #include "sim/harness.h"
 #include "sim/hinge.h"
+#include "sim/limits.h"
 #include "sim/shapes.h"
 #include "sim/stability.h"
 #include "sim/trajectory.h"
@@ -715,18 +716,20 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "monitor of `springy check` sees nothing at any frame, and every body that comes to rest in the first "
         "passing run (at the proposal, or below it when that fails) comes to rest at h too (over the last second, "
         "as `springy check --end-at-rest`): an instability that saturates below the monitor's energy tolerance "
-        "keeps a body moving. Largest stable step: bracketed by factors of 2 from "
-        "the survey's proposal, then "
+        "keeps a body moving. Proposed: 0.9 of the advisor's limit, from its estimate at t = 0 (at rest) or "
+        "from the survey (`--substeps auto`: the same estimate made every dt along a run with the default "
+        "adaptive step, its smallest; the substeps it gives at the scene's dt in brackets). The survey's "
+        "tightest mode: the stiffest (omega) or the most damped (its rate), and the mesh vertex with its largest "
+        "share. Tried: `--substeps auto` then tries its count, running the scene at it under the monitor as "
+        "`springy check` does, doubling it after each failure and halving it (rounded up) after a pass until a "
+        "run fails (app/suggest.cpp tryTheSubsteps, sim/harness.h searchCount); here counts of steps per frame, "
+        "as `springy check --dt` one frame `--substeps auto` runs (at the scenes' own dt of 2 ms the count "
+        "cannot fall below 1, the step not above 2 ms): the step it gives passed, and one at most twice as large "
+        "failed. Largest stable step: the tries' passing step and the failing one next above it bracket it, then "
      << halvings
-     << " halvings of the bracket's log ratio (assumes every smaller step passes); capped at one frame. "
-        "Proposed: 0.9 of the advisor's limit, from its estimate at t = 0 (at rest) or from the survey "
-        "(`--substeps auto`: the same estimate made every dt along a run with the default adaptive step, its "
-        "smallest; the substeps it gives at the scene's dt in brackets). The ratios: a proposal over the largest "
-        "stable step (at most 1: it holds; at least 0.5: within a factor 2). The survey's tightest mode: the "
-        "stiffest (omega) or the most damped (its rate), and the mesh vertex with its largest share. "
-        "`--substeps auto` then tries its count, running the scene at it under the monitor as `springy check` "
-        "does, and doubles it after each failure (app/suggest.cpp tryTheSubsteps): on these scenes the survey's "
-        "count passes at once (every ratio is at most 1). On the bunny of bunny_light with the body material (a "
+     << " halvings of the bracket's log ratio (assumes every smaller step passes); capped at one frame. The "
+        "ratios: a step over the largest stable step (at most 1: it holds; at least 0.5: within a factor 2). "
+        "On the bunny of bunny_light with the body material (a "
         "user's mesh given only a mass, tests/data/app/bunny_body.toml) it does not: the survey's run reaches "
         "omega 24,000 rad/s at the landing and proposes 20 substeps (0.1 ms), but RK4 runs at fixed steps meet "
         "stiffer shapes there (95,000 rad/s, around one vertex, along a run at 0.033 ms), fail at 0.1 and "
@@ -741,11 +744,14 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "where it was. In the column's lasting contact the limit follows the mesh as symplectic Euler's does "
         "(balls of 642 vertices: below 0.6 ms; the advisor proposes 0.18 ms, which passes); in head_on's brief "
         "impact it follows it less (balls of 162 vertices: 1.2-1.5 ms), so there symplectic Euler's limit is "
-        "4 times too cautious; no estimate of the impact's own limit is made yet. The bunny_light row is a "
+        "4 times too cautious; no estimate of the impact's own limit is made yet, and the tries make up for it "
+        "(`springy check scenes/head_on.toml --integrator backward_euler --substeps auto`: the survey's 11 "
+        "substeps of 2 ms, then 6 and 3 pass and 2 fails, so it runs at 3). The bunny_light row is a "
         "bisection's, not a clean edge either: `springy check --dt h --substeps 1 --end-at-rest` with the bunny "
         "1, 3, 10 and 30 mm higher passes all four starts at 0.25, 0.3 and 0.35 ms and fails three at 0.4 ms (at "
-        "1.63-1.73 s); its own start passes at 0.4 ms and fails at 0.43 ms. Against 0.35 ms its proposal is 0.42 "
-        "of the largest stable step. The survey's tightest mode is a damping rate of 14000-16000 1/s at 1.6-1.9 s "
+        "1.63-1.73 s); its own start passes at 0.4 ms and fails at 0.43 ms. Against 0.35 ms the survey's proposal is "
+        "0.42 of the largest stable step, and the tries' 0.29 ms (7 substeps of its 2 ms: 14 and 7 pass, 4 fails) "
+        "0.82. The survey's tightest mode is a damping rate of 14000-16000 1/s at 1.6-1.9 s "
         "(a hinge whose triangles have nearly collapsed), found as well along RK4 runs at fixed steps of 0.125 "
         "and 0.25 ms (16000 1/s): at 0.25 ms RK4 runs through that mode above its linear limit (h gamma 4.1 "
         "against 2.8) without a rise the monitor sees; at 0.3 ms, with steps shortened to land on the survey's "
@@ -761,11 +767,18 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "which the deepest sink adds the monitor's 2 % beyond that): the cube, restitution 1 and springs whose "
         "own limit is 0.1 s, fails from its landings alone, first at 0.0236 s (its landing step: 0.0233 s); "
         "above that its runs pass or fail by a landing's phase (0.024-0.0275 and 0.031 s pass, 0.029 and 0.0333 "
-        "s fail), so its largest stable step is the bisection's, not a clean edge.\n\n"
+        "s fail), so its largest stable step is the bisection's, not a clean edge. Nor is the ramp's, through the "
+        "rest criterion: its ball comes to rest at 5.56 ms (the tries' first passing run) and not in the runs at "
+        "5.8, 6.06, 6.6 and 7.9 ms (at 6.06 ms, `springy check scenes/ramp.toml --dt 0.006058 --substeps 1 "
+        "--end-at-rest`: a vertex moves 0.16 m over the last second, against 0.021 m allowed), so the survey's "
+        "proposal, 6.09 ms, is above the largest stable step here. When the survey's step was the first run (before the tries halved), the ball did not rest there "
+        "and the criterion did not apply: the largest stable step was 9.2 ms.\n\n"
      << "| scene | integrator | largest stable step | at rest: proposed | / largest | survey: proposed (substeps) | "
-        "/ largest | survey's tightest: when, body, mode (or landing) | runs (wall) |\n"
-     << "|---|---|---|---|---|---|---|---|---|\n";
-  csv << "scene,integrator,largest_stable_step,capped,rest_step,survey_step,survey_substeps,survey_time,runs,wall_seconds\n";
+        "/ largest | tried: step (per frame) | / largest | survey's tightest: when, body, mode (or landing) | "
+        "runs (wall) |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  csv << "scene,integrator,largest_stable_step,capped,rest_step,survey_step,survey_substeps,survey_time,tried_step,"
+         "tried_per_frame,runs,wall_seconds\n";
   // The showcase scenes with their own integrator; then, unless scenes are named, two scenes of
   // bodies that meet under backward Euler, whose step the contact between bodies limits
   // (sim/stability.h contactLimitedIntegrator).
@@ -812,18 +825,18 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
       }
       return true;
     };
-    double lo = std::min(surveyStep, frame), hi = lo;
-    bool capped = false;
-    if (passes(lo)) {
-      for (hi = std::min(2 * lo, frame); !capped; hi = std::min(2 * lo, frame)) {
-        if (!passes(hi)) break;
-        lo = hi;
-        capped = lo >= frame;
-      }
-    } else {
-      for (lo = hi / 2; !passes(lo) && lo > 1e-7; lo /= 2) hi = lo;
+    // `--substeps auto` with dt one frame: the survey's count of steps per frame, tried as
+    // app/suggest.cpp tries it (sim/harness.h searchCount); its passing count and the failing
+    // count next to it bracket the largest stable step.
+    const CountSearch tries = searchCount(safeSubsteps(frame, survey.dtMax, kSafetyFraction), kMaxSubsteps, 5, true,
+                                          [&](int n) { return passes(frame / n) ? std::string() : "fails"; });
+    const double tried = tries.count > 0 ? frame / tries.count : 0.0;
+    double lo = tried, hi = frame;
+    bool capped = tries.count == 1;
+    for (const CountTry& t : tries.tries) {
+      if (!t.failure.empty() && frame / t.count > lo) hi = std::min(hi, frame / t.count);
     }
-    if (!capped) {
+    if (!capped && lo > 0.0) {
       for (int i = 0; i < halvings; ++i) {
         const double mid = std::sqrt(lo * hi);
         (passes(mid) ? lo : hi) = mid;
@@ -833,11 +846,14 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
     const int substeps = safeSubsteps(scene.dt, survey.dtMax, kSafetyFraction);
     csv << name << "," << integratorName(scene.integrator) << "," << fmt("%.4g", lo) << "," << (capped ? 1 : 0) << ","
         << fmt("%.4g", restStep) << "," << fmt("%.4g", surveyStep) << "," << substeps << "," << survey.time << ","
-        << runs << "," << fmt("%.1f", wall) << "\n";
+        << fmt("%.4g", tried) << "," << tries.count << "," << runs << "," << fmt("%.1f", wall) << "\n";
     const auto ratio = [&](double h) { return capped ? "<= " + fmt("%.2f", h / lo) : fmt("%.2f", h / lo); };
     md << "| " << name << " | " << integratorName(scene.integrator) << " | " << (capped ? ">= " : "") << fmt("%.3g", lo)
        << " s | " << fmt("%.3g", restStep) << " s | " << ratio(restStep) << " | " << fmt("%.3g", surveyStep) << " s ("
        << substeps << ") | " << ratio(surveyStep) << " | "
+       << (tries.count > 0 ? fmt("%.3g", tried) + " s (" + std::to_string(tries.count) + ") | " + ratio(tried)
+                           : std::string("every count tried failed | -"))
+       << " | "
        << (survey.failure.empty() ? "t = " + fmt("%.3g", survey.time) + " s, " + model.bodies[survey.body].name +
                                         (survey.landing ? " (landing)" : ", " + modeWhere(model, survey))
                                   : "survey failed: " + survey.failure)
@@ -853,14 +869,14 @@ int runStability(const StudyOptions& o) {
   const int iterations = o.quick ? 4 : 8;
   std::ostringstream csv, md;
   csv << "case,integrator,measured_dt,capped,predicted_dt,two_over_omega,omega_max,gamma_max,mode_found_dt,"
-         "survey_proposed_dt,survey_failure,failed_first\n";
+         "survey_proposed_dt,survey_failure,tried_dt,tried_runs,failed_first\n";
   md << "# Stability on stiff and extreme cases\n\n"
      << "Generated by `springy study stability" << (o.quick ? " --quick" : "") << " -o " << o.output
      << "` (scripts/study.sh regenerates docs/). Do not edit by hand.\n\n"
      << "- Machine: " << machine() << ".\n"
      << "- Largest stable dt: bisection in log dt (" << iterations
-     << " halvings of the bracket's log ratio after "
-        "bracketing by factors of 4); stable = over "
+     << " halvings of the bracket's log ratio after bracketing by the tries of `--substeps auto`, below, or where "
+        "it proposes no step by factors of 4); stable = over "
      << horizon
      << " simulated s every position and velocity "
         "finite, the body never larger than 10x its rest size, total energy never more than its own scale above "
@@ -875,10 +891,17 @@ int runStability(const StudyOptions& o) {
   md << "- Whole run: what `--substeps auto` proposes for the case, 0.9 of the survey's smallest limit (the stiffest "
         "mode found along the run, sim/stability.h surveyStability, run from the case's released shape, or a "
         "landing's step at the cases' energy tolerance of 100 %), over the "
-        "largest stable dt (at most 1: it holds; at least 0.5: within a factor 2).\n\n";
+        "largest stable dt (at most 1: it holds; at least 0.5: within a factor 2). Tried: the step `--substeps "
+        "auto` then gives, running the case over its horizon as the bisection does, at steps 0.1 s / n from the "
+        "first n whose step is at most the proposal, n doubled after a failure and halved (rounded up) after a "
+        "pass until a run fails (sim/harness.h searchCount; the runs it took in brackets): it passed, and a step at "
+        "most twice as large failed, which bounds the bisection above. Not every edge is monotone: under backward "
+        "Euler at 100 g the survey proposes a landing's step, 0.0443 s, but the tries' first step, 0.0333 s, "
+        "fails (the volume), and the largest stable step is taken below it (bracketed instead from the "
+        "prediction, by factors of 4, the bisection found 0.0628 s passing: 1.41 here was 0.71).\n\n";
   md << "| case | integrator | largest stable dt | predicted | 2/omega_max | measured / predicted | mode found | "
-        "measured / found | whole run: proposed | / largest | failed first |\n"
-     << "|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "measured / found | whole run: proposed | / largest | tried (runs) | / largest | failed first |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::ostringstream refused, descriptions, csvRuns;
   for (const CaseFactory& factory : stabilityCases()) {
     StabilityCase c;
@@ -895,8 +918,6 @@ int runStability(const StudyOptions& o) {
       const BodyStability& b = pred.bodies[0];
       const double bound = 2.0 / b.omegaMax;
       const double guess = std::isfinite(pred.dtMax) ? pred.dtMax : 0.01;
-      const MeasuredStep m = largestStableStep(c.model, integrator, horizon, guess, 0.1, &c.positions, iterations);
-      std::string failed = m.capped ? "none up to 0.1 s" : m.above.kind;
       const World world(c.model, integrator, guess);
       ModeEstimator modes(world);
       const double found = ModeEstimator::step(integrator, modes.estimate(c.positions, 60), horizon);
@@ -906,10 +927,19 @@ int runStability(const StudyOptions& o) {
                                                      kCaseEnergyTolerance);
       const double proposed = kSafetyFraction * survey.dtMax;
       std::string surveyFailure = survey.failure.empty() ? "" : failureKind(survey.failure);
+      // Then tried as `--substeps auto` tries its count (sim/harness.h searchCount); the largest
+      // stable step is bisected in the bracket the tries leave (a step they saw fail bounds it).
+      const TriedStep tried = std::isfinite(proposed)
+                                  ? triedStep(c.model, integrator, horizon, proposed, 0.1, &c.positions, iterations)
+                                  : TriedStep{};
+      const MeasuredStep m = tried.runs > 0 ? tried.largest
+                                            : largestStableStep(c.model, integrator, horizon, guess, 0.1,
+                                                                &c.positions, iterations);
+      std::string failed = m.capped ? "none up to 0.1 s" : m.above.kind;
       csv << c.name << "," << integratorName(integrator) << "," << fmt("%.4g", m.dt) << "," << (m.capped ? 1 : 0) << ","
           << fmt("%.4g", pred.dtMax) << "," << fmt("%.4g", bound) << "," << fmt("%.4g", b.omegaMax) << ","
           << fmt("%.4g", b.gammaMax) << "," << fmt("%.4g", found) << "," << fmt("%.4g", proposed) << ","
-          << surveyFailure << "," << failed << "\n";
+          << surveyFailure << "," << fmt("%.4g", tried.dt) << "," << tried.runs << "," << failed << "\n";
       md << "| " << c.name << " | " << integratorName(integrator) << " | " << (m.capped ? ">= " : "")
          << fmt("%.3g", m.dt) << " s | "
          << (std::isfinite(pred.dtMax) ? fmt("%.3g", pred.dtMax) + " s" : std::string("unconditional")) << " | "
@@ -920,7 +950,10 @@ int runStability(const StudyOptions& o) {
          << (std::isfinite(proposed) ? fmt("%.3g", proposed) + " s" : std::string("unconditional"))
          << (surveyFailure.empty() ? "" : " (survey stopped: " + surveyFailure + ")") << " | "
          << (std::isfinite(proposed) && !m.capped ? fmt("%.2f", proposed / m.dt) : std::string("-")) << " | "
-         << failed << " |\n";
+         << (tried.runs > 0 && !m.capped ? fmt("%.3g", tried.dt) + " s (" + std::to_string(tried.runs) + ")"
+                                         : std::string("-"))
+         << " | " << (tried.runs > 0 && !m.capped ? fmt("%.2f", tried.dt / m.dt) : std::string("-")) << " | " << failed
+         << " |\n";
     }
   }
   if (!o.quick || !o.scenes.empty()) {  // --quick without --scenes leaves out the showcase scenes' whole runs

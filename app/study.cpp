@@ -771,7 +771,8 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
         "rest criterion: its ball comes to rest at 5.56 ms (the tries' first passing run) and not in the runs at "
         "5.8, 6.06, 6.6 and 7.9 ms (at 6.06 ms, `springy check scenes/ramp.toml --dt 0.006058 --substeps 1 "
         "--end-at-rest`: a vertex moves 0.16 m over the last second, against 0.021 m allowed), so the survey's "
-        "proposal, 6.09 ms, is above the largest stable step here. When the survey's step was the first run (before the tries halved), the ball did not rest there "
+        "proposal, 6.09 ms, is above the largest stable step here. When the survey's step was the first run (before "
+        "the tries halved), the ball did not rest there "
         "and the criterion did not apply: the largest stable step was 9.2 ms.\n\n"
      << "| scene | integrator | largest stable step | at rest: proposed | / largest | survey: proposed (substeps) | "
         "/ largest | tried: step (per frame) | / largest | survey's tightest: when, body, mode (or landing) | "
@@ -932,9 +933,9 @@ int runStability(const StudyOptions& o) {
       const TriedStep tried = std::isfinite(proposed)
                                   ? triedStep(c.model, integrator, horizon, proposed, 0.1, &c.positions, iterations)
                                   : TriedStep{};
-      const MeasuredStep m = tried.runs > 0 ? tried.largest
-                                            : largestStableStep(c.model, integrator, horizon, guess, 0.1,
-                                                                &c.positions, iterations);
+      const MeasuredStep m =
+          tried.runs > 0 ? tried.largest
+                         : largestStableStep(c.model, integrator, horizon, guess, 0.1, &c.positions, iterations);
       std::string failed = m.capped ? "none up to 0.1 s" : m.above.kind;
       csv << c.name << "," << integratorName(integrator) << "," << fmt("%.4g", m.dt) << "," << (m.capped ? 1 : 0) << ","
           << fmt("%.4g", pred.dtMax) << "," << fmt("%.4g", bound) << "," << fmt("%.4g", b.omegaMax) << ","

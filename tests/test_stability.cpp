@@ -242,7 +242,7 @@ TEST(Tries, BracketTheFewestStepsThatPassWithinAFactorTwo) {
   EXPECT_EQ(s.count, 100);
   EXPECT_EQ(ran, std::vector<int>{100});
   ran.clear();
-  s = searchCount(3, 1000, 5, true, [&](int n) { return run(n + 34); });  // passes from 3 on: 3, 2 fail
+  s = searchCount(3, 1000, 5, true, [&](int n) { return run(n + 34); });  // passes from 3 on: 3 passes, 2 fails
   EXPECT_EQ(s.count, 3);
   EXPECT_EQ(ran, (std::vector<int>{37, 36}));
   ran.clear();

@@ -802,9 +802,7 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
     const double frame = 1.0 / scene.view.render.fps;
     const double restStep = kSafetyFraction * rest.dtMax, surveyStep = kSafetyFraction * survey.dtMax;
     int runs = 0;
-    // The first passing run (at the proposal, or below it when that fails) says which bodies
-    // come to rest; a larger step that leaves one of them moving carries an instability the
-    // energy check does not see (saturated under its tolerance), and does not pass.
+    // The first passing run says which bodies come to rest (sim/trajectory.h bodyNoLongerAtRest).
     std::vector<bool> restsAtReference;
     const auto passes = [&](double h) {
       PathSettings s;
@@ -816,15 +814,12 @@ std::string wholeRuns(const StudyOptions& o, std::ostringstream& csv) {
       ++runs;
       const RunPath run = tracePath(model, s);
       if (!run.complete) return false;
-      if (restsAtReference.empty()) restsAtReference = run.endsAtRest;
-      for (std::size_t b = 0; b < restsAtReference.size(); ++b) {
-        if (restsAtReference[b] && !run.endsAtRest[b]) {
-          std::fprintf(stderr, "springy study stability: %s: step %.4g s: body '%s' does not come to rest\n",
-                       name.c_str(), h, model.bodies[b].name.c_str());
-          return false;
-        }
+      const int moving = bodyNoLongerAtRest(restsAtReference, run);
+      if (moving >= 0) {
+        std::fprintf(stderr, "springy study stability: %s: step %.4g s: body '%s' does not come to rest\n",
+                     name.c_str(), h, model.bodies[moving].name.c_str());
       }
-      return true;
+      return moving < 0;
     };
     // `--substeps auto` with dt one frame: the survey's count of steps per frame, tried as
     // app/suggest.cpp tries it (sim/harness.h searchCount); its passing count and the failing

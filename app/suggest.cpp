@@ -60,8 +60,8 @@ std::string limitingMode(const BodyInfo& info, const StabilitySurvey& survey) {
 // (bunny_light's survey gives 14 substeps, and 7 pass: docs/stability.md), so `--substeps auto`
 // (`searchUp`) also halves a count that passed until a run fails: the count it gives is within a
 // factor 2 of the fewest that pass. A larger step passes only if every body that came to rest at
-// the first passing count comes to rest at it too (an instability that saturates below the
-// monitor's energy tolerance keeps a body moving). The default step keeps its margin. `what`
+// the first passing count comes to rest at it too (sim/trajectory.h bodyNoLongerAtRest). The
+// default step keeps its margin. `what`
 // names the choice in messages. Returns what the tries found ("" when the first passed alone).
 std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char* what, unsigned threads, bool searchUp,
                            std::ostream& log) {
@@ -87,14 +87,8 @@ std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char
       lastFailure = r.failure;
       return at;
     }
-    if (restsAtFirstPass.empty()) {
-      restsAtFirstPass = r.endsAtRest;
-      return "";
-    }
-    for (std::size_t b = 0; b < restsAtFirstPass.size(); ++b) {
-      if (restsAtFirstPass[b] && !r.endsAtRest[b]) return "body '" + model.bodies[b].name + "' never comes to rest";
-    }
-    return "";
+    const int moving = bodyNoLongerAtRest(restsAtFirstPass, r);
+    return moving < 0 ? std::string() : "body '" + model.bodies[moving].name + "' never comes to rest";
   };
   const CountSearch found = searchCount(scene.substeps, kMaxSubsteps, kDoublings, searchUp, run);
   if (found.count == 0) {

@@ -10,6 +10,17 @@
 
 namespace springy {
 
+int bodyNoLongerAtRest(std::vector<bool>& restsAtFirst, const RunPath& run) {
+  if (restsAtFirst.empty()) {
+    restsAtFirst = run.endsAtRest;
+    return -1;
+  }
+  for (std::size_t b = 0; b < restsAtFirst.size() && b < run.endsAtRest.size(); ++b) {
+    if (restsAtFirst[b] && !run.endsAtRest[b]) return static_cast<int>(b);
+  }
+  return -1;
+}
+
 RunPath tracePath(const Model& model, const PathSettings& settings) {
   World world(model, settings.integrator, settings.dt);
   if (world.adaptive()) world.setTolerance(settings.tolerance);

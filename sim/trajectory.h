@@ -40,6 +40,13 @@ struct RunPath {
 // Runs the model under the stability monitor, sampling every frame. Stops at the first failure.
 RunPath tracePath(const Model& model, const PathSettings& settings);
 
+// Runs of one scene at several steps (the advisor's tries, the stability study): every body that
+// came to rest in the first complete run must come to rest in each later one, or that run carries
+// an instability the monitor's energy check does not see (saturated under its tolerance). The
+// first complete run given sets the reference; returns the first body that no longer comes to
+// rest, or -1.
+int bodyNoLongerAtRest(std::vector<bool>& restsAtFirst, const RunPath& run);
+
 // The error of `run` against `reference` (same model, same frames), the largest over bodies:
 struct PathError {
   double centroidRms = 0.0;   // RMS over frames of the centroid's distance, / body size

@@ -153,6 +153,7 @@ TEST(Advice, SubstepsAutoHoldsThroughTheBunnysLanding) {
     const Result f = run(common + std::to_string(fewer));
     EXPECT_EQ(f.status, 1) << fewer << " substeps: " << f.output;
     EXPECT_NE(f.output.find("total energy rose"), std::string::npos) << f.output;
+    EXPECT_GT(n, fewer);
   }
 }
 

@@ -143,13 +143,14 @@ Vec3 contactVelocity(const Vec3& velocity, const Vec3& n, const ContactMaterial&
   return vtAfter + n * rebound;
 }
 
-bool Colliders::resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting) const {
+bool Colliders::resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting, ContactHit* first) const {
   Vec3 start = from;
   bool touched = false;
   // A few rounds: hit, slide along the surface, possibly hit another collider.
   for (int round = 0; round < 4; ++round) {
     ContactHit hit;
     if (!firstHit(start, to, hit)) return touched;
+    if (first && !touched) *first = hit;
     touched = true;
     const Vec3 before = velocity;
     const bool sustained = resting || round > 0;

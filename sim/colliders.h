@@ -83,8 +83,8 @@ struct Colliders {
   bool firstHit(const Vec3& from, const Vec3& to, ContactHit& hit) const;
   // Resolves one vertex's path: returns the corrected end position and updates `velocity`.
   // `resting`: the vertex is in sustained contact (touched a collider within restingWindow).
-  // Returns true if any contact happened.
-  bool resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting) const;
+  // Returns true if any contact happened; `first`, when given, receives the first hit.
+  bool resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting, ContactHit* first = nullptr) const;
   // No collider can be hit on a path that ends at p: there are no triangle meshes and p is on
   // or in front of every plane (firstHit finds nothing then). Inline: most vertices of most
   // steps take only this test.

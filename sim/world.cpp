@@ -102,7 +102,10 @@ World::World(Model model, Integrator integrator, double dt)
   if (adaptive()) {
     for (auto* buffer : {&k1v_, &k2v_, &vs_, &xn_, &vn_}) buffer->assign(n, Vec3{});
     if (contacts_) vBefore_.assign(n, Vec3{});
-    if (!model_->colliders.empty()) lastContactTime_.assign(n, -std::numeric_limits<double>::infinity());
+    if (!model_->colliders.empty()) {
+      lastContactTime_.assign(n, -std::numeric_limits<double>::infinity());
+      candidateHit_.assign(n, 0);
+    }
     hNext_ = dt_;
     setTolerance(tolerance_);
     updateStableStep();
@@ -251,21 +254,32 @@ bool World::synchronizedState(std::vector<Vec3>& x, std::vector<Vec3>& v) const 
 }
 
 void World::stepVelocityVerlet() {
-  // a(t) is the a(t + dt) of the previous step unless contact changed the velocities since.
+  // a(t) is the a(t + dt) of the previous step unless a contact between bodies changed the state
+  // since. The static colliders act on the drifted positions before a(t + dt) is evaluated there,
+  // with the velocity predictor as the velocity they change; the change carries over to v(t + dt).
+  // Forces are then never evaluated at a vertex behind a collider (resolved at the end of the step,
+  // a vertex that hit the ground pulled its neighbours down for half a step and bounced the body
+  // too high: 3.3 times the error through single_sphere's landings at 2 ms, docs/accuracy-contact.md),
+  // and a(t + dt) stays valid for the next step, which no longer evaluates again after a contact.
   const double dt = dt_, t = time_;
   Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data(), *vs = vs_.data(), *aNext = aNext_.data();
   if (!cachedAccelerationValid_) accelerations(x, v, t, a);
+  const bool contacts = !model_->colliders.empty();
   forVertices([&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       x[i] += v[i] * dt + a[i] * (0.5 * dt * dt);
       vs[i] = v[i] + a[i] * dt;  // velocity predictor for the velocity-dependent forces
     }
+    if (contacts) collide(begin, end, vs);
   });
   accelerations(x, vs, t + dt, aNext);
-  cachedAccelerationValid_ = true;  // unless a contact changes a velocity in the last pass
-  lastPass([&](std::size_t i) {
-    v[i] += (a[i] + aNext[i]) * (0.5 * dt);
-    a[i] = aNext[i];
+  cachedAccelerationValid_ = true;
+  forVertices([&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3 change = vs[i] - (v[i] + a[i] * dt);
+      v[i] += (a[i] + aNext[i]) * (0.5 * dt) + change;
+      a[i] = aNext[i];
+    }
   });
 }
 
@@ -362,13 +376,15 @@ bool World::chooseStep(double& h, double& wanted) {
   return false;
 }
 
-bool World::judge(double h, double wanted, double embedded, bool afterRejection) {
+bool World::judge(double h, double wanted, double embedded, bool afterRejection, double impactGiven) {
   // A step whose candidate is not finite is taken: the monitor names the blow-up.
   if (std::isnan(embedded)) {
     accept(h, wanted, 1.0, 1.0, afterRejection);
     return true;
   }
-  const double impact = !model_->colliders.empty() && embedded <= 1.0 ? impactError(h) : 0.0;
+  const double impact = impactGiven >= 0.0                              ? impactGiven
+                        : !model_->colliders.empty() && embedded <= 1.0 ? impactError(h)
+                                                                        : 0.0;
   if (embedded <= 1.0 && impact <= 1.0) {
     // PI controller on the embedded error (local error ~ h^3 for both pairs: exponents 0.7/3
     // and 0.4/3). The impact error grows like h^2 in sustained contact (the velocity a step
@@ -436,47 +452,81 @@ void World::stepAdaptiveVerlet() {
   // Velocity Verlet at a variable step: x1 = x + h v + h^2/2 a0, v1 = v + h/2 (a0 + a1). Its
   // local position error is h^3/6 a'(t) + O(h^4), and a' ~ (a1 - a0) / h, so h^2/6 |a1 - a0|
   // estimates it from the step's own evaluation. One evaluation per step: a1 is the next step's
-  // a0 unless a contact changed the state (as fixed-step Verlet). Its stable step is 2/omega
-  // against Bogacki-Shampine's 1.73/omega for three evaluations, which makes it the cheaper of
-  // the two where stability, not accuracy, bounds the step.
+  // a0 unless a contact between bodies changed the state. Its stable step is 2/omega against
+  // Bogacki-Shampine's 1.73/omega for three evaluations, which makes it the cheaper of the two
+  // where stability, not accuracy, bounds the step. The static colliders act on the candidate
+  // before a1 is evaluated, as in fixed-step Verlet (stepVelocityVerlet).
   const double t = time_;
   const Vec3 *x = x_.data(), *v = v_.data();
   if (!cachedAccelerationValid_) accelerations(x, v, t, k1v_.data());
   const Vec3* a0 = k1v_.data();
   Vec3 *a1 = k2v_.data(), *vs = vs_.data(), *xn = xn_.data(), *vn = vn_.data();
   const double* inv = invScale_.data();
+  const bool contacts = !model_->colliders.empty();
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
     if (!chooseStep(h, wanted)) return;
+    std::atomic<double> impactWorst{0.0};
     forVertices([&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
         xn[i] = x[i] + v[i] * h + a0[i] * (0.5 * h * h);
         vs[i] = v[i] + a0[i] * h;  // velocity predictor for the velocity-dependent forces
       }
+      if (contacts) foldLargest(impactWorst, collideCandidate(begin, end, h));
     });
     accelerations(xn, vs, t + h, a1);
     std::atomic<double> worst{0.0};
     forVertices([&](std::size_t begin, std::size_t end) {
       foldLargest(worst, largestOver(begin, end, [&](std::size_t i) {
-                    vn[i] = v[i] + (a0[i] + a1[i]) * (0.5 * h);
+                    // The contacts' change of the predictor carries over to the end velocity.
+                    const Vec3 change = vs[i] - (v[i] + a0[i] * h);
+                    vn[i] = v[i] + (a0[i] + a1[i]) * (0.5 * h) + change;
                     return length(a1[i] - a0[i]) * (h * h / 6.0) * inv[i];
                   }));
     });
-    const double embedded = worst.load();
+    const double embedded = worst.load(), impact = impactWorst.load();
     if (!std::isnan(embedded) && embedded <= 1.0) {
-      // Taken unless an impact says otherwise: a1 becomes the next a0 (the contact pass clears
-      // the flag if it changes the state).
+      // Taken unless an impact says otherwise: a1 becomes the next a0.
       std::swap(k1v_, k2v_);
       cachedAccelerationValid_ = true;
-      if (judge(h, wanted, embedded, rejected)) return;
+      if (judge(h, wanted, embedded, rejected, impact)) return;
       std::swap(k1v_, k2v_);  // rejected for an impact: a0 is still the step's
       a0 = k1v_.data();
       a1 = k2v_.data();
       continue;
     }
     cachedAccelerationValid_ = false;  // a NaN step is taken as it is; a rejected one keeps a0
-    if (judge(h, wanted, embedded, rejected)) return;
+    if (judge(h, wanted, embedded, rejected, impact)) return;
   }
+}
+
+double World::collideCandidate(std::size_t begin, std::size_t end, double h) {
+  // The static colliders on the candidate path x -> xn, with the predictor vs as the velocity;
+  // nothing outside the candidate changes (the step may be taken again). Returns the largest
+  // impact error: a velocity change dv made at the end of the step instead of at the hit, a
+  // fraction s into it, misplaces the vertex by about |dv| (1 - s) h (as a fraction of the
+  // tolerance).
+  const Colliders& colliders = model_->colliders;
+  const Vec3* x = x_.data();
+  Vec3 *xn = xn_.data(), *vs = vs_.data();
+  const double* inv = invScale_.data();
+  double worst = 0.0;
+  for (std::size_t i = begin; i < end; ++i) {
+    candidateHit_[i] = 0;
+    if (model_->invMass[i] == 0.0) continue;  // pinned
+    if (!colliders.clearAt(xn[i])) {
+      const Vec3 before = vs[i];
+      const bool resting = restingAt(i);
+      ContactHit first;
+      if (colliders.resolve(x[i], xn[i], vs[i], resting, &first)) {
+        candidateHit_[i] = 1;
+        const Vec3 after = contactVelocity(before, first.normal, first.material, colliders.restingSpeed, resting);
+        worst = std::max(worst, length(after - before) * (1.0 - first.fraction) * h * inv[i]);
+      }
+    }
+    if (dampingLayers_) colliders.dampInLayers(xn[i], vs[i], h);
+  }
+  return worst;
 }
 
 void World::accept(double h, double wanted, double factor, double error, bool afterRejection) {
@@ -547,21 +597,33 @@ void World::lastPass(Update&& update) {
   forVertices([&](std::size_t begin, std::size_t end) {
     if (saveOld) std::copy(x + begin, x + end, xOld + begin);
     for (std::size_t i = begin; i < end; ++i) update(i);
-    if (contacts && collide(begin, end)) touched.store(true, std::memory_order_relaxed);
+    if (contacts && integrator_ == Integrator::AdaptiveVerlet) {
+      recordCandidateContacts(begin, end);  // resolved on the candidate (collideCandidate)
+    } else if (contacts && collide(begin, end, v_.data())) {
+      touched.store(true, std::memory_order_relaxed);
+    }
   });
   if (touched.load(std::memory_order_relaxed)) cachedAccelerationValid_ = false;
 }
 
-bool World::collide(std::size_t begin, std::size_t end) {
+void World::recordCandidateContacts(std::size_t begin, std::size_t end) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const bool hit = candidateHit_[i] != 0;
+    sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
+    if (hit) lastContactTime_[i] = time_;
+  }
+}
+
+bool World::collide(std::size_t begin, std::size_t end, Vec3* velocity) {
   const Colliders& colliders = model_->colliders;
   const bool layers = dampingLayers_;
   bool hitAny = false;
   for (std::size_t i = begin; i < end; ++i) {
     if (model_->invMass[i] == 0.0) continue;  // pinned
-    const bool hit = !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], v_[i], restingAt(i));
+    const bool hit = !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], velocity[i], restingAt(i));
     sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
     if (hit && adaptive()) lastContactTime_[i] = time_;
-    const bool damped = layers && colliders.dampInLayers(x_[i], v_[i], dt_);
+    const bool damped = layers && colliders.dampInLayers(x_[i], velocity[i], dt_);
     hitAny = hitAny || hit || damped;
   }
   return hitAny;

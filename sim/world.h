@@ -5,7 +5,9 @@
 //              [deformation damping], evaluated 1-4 times per step
 //   integrate: one function per integrator advances positions and velocities by dt
 //   collide:   [static colliders] [damping layers] (continuous, earliest hit wins), in the
-//              integrator's last pass over the vertices (lastPass: one fork-join for both)
+//              integrator's last pass over the vertices (lastPass: one fork-join for both);
+//              Verlet (fixed and adaptive) resolves them on the drifted positions instead,
+//              before the forces there are evaluated
 //   contact:   [bodies] between bodies and within a body (sim/contact.h), over the whole step's
 //              paths, when two bodies or a self-contact body are in the scene
 // A stage is in the list only if the scene uses it: no wind stage without wind, no hinge stage
@@ -197,7 +199,12 @@ class World {
   bool keepsOld() const { return !model_->colliders.empty() || contacts_ != nullptr; }
   // Resolves the contacts of vertices [begin, end) along their paths xOld -> x; true if any
   // vertex touched a collider or a damping layer.
-  bool collide(std::size_t begin, std::size_t end);
+  bool collide(std::size_t begin, std::size_t end, Vec3* velocity);
+  // The adaptive Verlet step resolves the static colliders on its candidate (xn_, vs_) before
+  // evaluating the forces there, and returns the largest impact error of vertices [begin, end);
+  // recordCandidateContacts books the hits once the candidate is taken.
+  double collideCandidate(std::size_t begin, std::size_t end, double h);
+  void recordCandidateContacts(std::size_t begin, std::size_t end);
   // One function per integrator: advances x_ and v_ by dt_ from time_, contacts included.
   void stepExplicitEuler();
   void stepSymplecticEuler();
@@ -211,7 +218,8 @@ class World {
   // run must stop; stepProblem_ says why), and the verdict on a tried step from its embedded
   // error and its impacts' (true: accepted and taken).
   bool chooseStep(double& h, double& wanted);
-  bool judge(double h, double wanted, double embedded, bool afterRejection);
+  // impactGiven >= 0: the impacts' error, already estimated (collideCandidate); otherwise impactError's.
+  bool judge(double h, double wanted, double embedded, bool afterRejection, double impactGiven = -1.0);
   // The adaptive step's error estimates, as fractions of the tolerance (<= 1: accepted).
   double impactError(double h) const;
   // Takes the candidate state (xn_, vn_) as the step's end, resolving the static colliders; the
@@ -255,6 +263,7 @@ class World {
   std::vector<double> invScale_;         // per vertex: 1 / (tolerance x its body's rest size)
   std::vector<double> lastContactTime_;  // per vertex: when it last touched a static collider
   std::vector<Vec3> xn_, vn_, vBefore_;  // a step's candidate state; velocities before contact
+  std::vector<uint8_t> candidateHit_;    // per vertex: the candidate touched a static collider
   StepStats stats_;
   std::string stepProblem_;
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator

@@ -414,6 +414,25 @@ TEST(Resting, BouncingSoftBallNeverGainsEnergyNorSinksIntoTheGround) {
   }
 }
 
+TEST(Resting, VerletEvaluatesItsForcesOncePerStepThroughContact) {
+  // Velocity Verlet resolves the ground on the drifted positions before it evaluates the forces
+  // there, so a(t + dt) is never taken behind the ground and stays the next step's a(t): one
+  // evaluation per step however many steps touch the ground (resolving after the evaluation cost a
+  // second one after every touching step).
+  const double dt = 1e-3;
+  World world(droppedBall(0.3, 0.6, dt), Integrator::VelocityVerlet, dt);
+  int touching = 0;
+  const int steps = 3000;
+  for (int s = 0; s < steps; ++s) {
+    world.step();
+    bool touched = false;
+    for (const Vec3& x : world.positions()) touched = touched || x.y < 1e-3;
+    touching += touched ? 1 : 0;
+  }
+  EXPECT_GT(touching, steps / 4);  // the ball lands at 0.25 s and bounces on it
+  EXPECT_EQ(world.forceEvaluations(), static_cast<uint64_t>(steps) + 1);
+}
+
 // Restitution 0: with a bouncy ground (0.6) the contact vertices, pressed down by the body's
 // springs at many g, hit faster than restingSpeed (4 |g| dt) every other step and keep bouncing,
 // so that case does not come to rest (reported as a bug in sim/, not asserted here).
@@ -548,7 +567,7 @@ BodyDesc softBall(double y) {
 }
 
 TEST(Resting, SoftBallDroppedOnTheGroundComesToRestWithoutGainingEnergy) {
-  for (Integrator integrator : {Integrator::SymplecticEuler, Integrator::RK4}) {
+  for (Integrator integrator : {Integrator::SymplecticEuler, Integrator::VelocityVerlet, Integrator::RK4}) {
     Model model;
     model.gravity = {0, -kG, 0};
     addBody(model, softBall(1.3));  // 0.3 m above the ground

@@ -382,9 +382,8 @@ bool World::judge(double h, double wanted, double embedded, bool afterRejection,
     accept(h, wanted, 1.0, 1.0, afterRejection);
     return true;
   }
-  const double impact = impactGiven >= 0.0                              ? impactGiven
-                        : !model_->colliders.empty() && embedded <= 1.0 ? impactError(h)
-                                                                        : 0.0;
+  double impact = 0.0;
+  if (!model_->colliders.empty() && embedded <= 1.0) impact = impactGiven >= 0.0 ? impactGiven : impactError(h);
   if (embedded <= 1.0 && impact <= 1.0) {
     // PI controller on the embedded error (local error ~ h^3 for both pairs: exponents 0.7/3
     // and 0.4/3). The impact error grows like h^2 in sustained contact (the velocity a step

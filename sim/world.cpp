@@ -257,10 +257,10 @@ void World::stepVelocityVerlet() {
   // a(t) is the a(t + dt) of the previous step unless a contact between bodies changed the state
   // since. The static colliders act on the drifted positions before a(t + dt) is evaluated there,
   // with the velocity predictor as the velocity they change; the change carries over to v(t + dt).
-  // Forces are then never evaluated at a vertex behind a collider (resolved at the end of the step,
-  // a vertex that hit the ground pulled its neighbours down for half a step and bounced the body
-  // too high: 3.3 times the error through single_sphere's landings at 2 ms, docs/accuracy-contact.md),
-  // and a(t + dt) stays valid for the next step, which no longer evaluates again after a contact.
+  // Forces are then never evaluated at a vertex behind a collider (resolved after the evaluation, a
+  // vertex that hit the ground pulled its neighbours down for half a step), and a(t + dt) stays
+  // valid for the next step, which no longer evaluates again after a contact. The errors through
+  // contact, mostly smaller and on some scenes larger: docs/model.md §14, docs/accuracy-contact.md.
   const double dt = dt_, t = time_;
   Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data(), *vs = vs_.data(), *aNext = aNext_.data();
   if (!cachedAccelerationValid_) accelerations(x, v, t, a);

@@ -502,9 +502,7 @@ void World::stepAdaptiveVerlet() {
 double World::collideCandidate(std::size_t begin, std::size_t end, double h) {
   // The static colliders on the candidate path x -> xn, with the predictor vs as the velocity;
   // nothing outside the candidate changes (the step may be taken again). Returns the largest
-  // impact error: a velocity change dv made at the end of the step instead of at the hit, a
-  // fraction s into it, misplaces the vertex by about |dv| (1 - s) h (as a fraction of the
-  // tolerance).
+  // impact error (impactMisplacement, as a fraction of the tolerance).
   const Colliders& colliders = model_->colliders;
   const Vec3* x = x_.data();
   Vec3 *xn = xn_.data(), *vs = vs_.data();
@@ -519,8 +517,7 @@ double World::collideCandidate(std::size_t begin, std::size_t end, double h) {
       ContactHit first;
       if (colliders.resolve(x[i], xn[i], vs[i], resting, &first)) {
         candidateHit_[i] = 1;
-        const Vec3 after = contactVelocity(before, first.normal, first.material, colliders.restingSpeed, resting);
-        worst = std::max(worst, length(after - before) * (1.0 - first.fraction) * h * inv[i]);
+        worst = std::max(worst, impactMisplacement(before, first, resting, h) * inv[i]);
       }
     }
     if (dampingLayers_) colliders.dampInLayers(xn[i], vs[i], h);
@@ -558,6 +555,11 @@ void World::accept(double h, double wanted, double factor, double error, bool af
   if (landed_ || due) updateStableStep();
 }
 
+double World::impactMisplacement(const Vec3& velocity, const ContactHit& hit, bool resting, double h) const {
+  const Vec3 after = contactVelocity(velocity, hit.normal, hit.material, model_->colliders.restingSpeed, resting);
+  return length(after - velocity) * (1.0 - hit.fraction) * h;
+}
+
 double World::impactError(double h) const {
   // A vertex that hits a static collider at a fraction s of the step is stopped there and given
   // its new velocity at the end of the step: the velocity change dv comes (1 - s) h late, which
@@ -573,9 +575,7 @@ double World::impactError(double h) const {
                   if (model_->invMass[i] == 0.0 || colliders.clearAt(xn[i])) return 0.0;
                   ContactHit hit;
                   if (!colliders.firstHit(x[i], xn[i], hit)) return 0.0;
-                  const Vec3 after =
-                      contactVelocity(vn[i], hit.normal, hit.material, colliders.restingSpeed, restingAt(i));
-                  return length(after - vn[i]) * (1.0 - hit.fraction) * h * inv[i];
+                  return impactMisplacement(vn[i], hit, restingAt(i), h) * inv[i];
                 }));
   });
   return worst.load();
@@ -607,10 +607,13 @@ void World::lastPass(Update&& update) {
 
 void World::recordCandidateContacts(std::size_t begin, std::size_t end) {
   for (std::size_t i = begin; i < end; ++i) {
-    const bool hit = candidateHit_[i] != 0;
-    sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
-    if (hit) lastContactTime_[i] = time_;
+    bookContact(i, candidateHit_[i] != 0);
   }
+}
+
+void World::bookContact(std::size_t i, bool hit) {
+  sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
+  if (hit && adaptive()) lastContactTime_[i] = time_;
 }
 
 bool World::collide(std::size_t begin, std::size_t end, Vec3* velocity) {
@@ -620,8 +623,7 @@ bool World::collide(std::size_t begin, std::size_t end, Vec3* velocity) {
   for (std::size_t i = begin; i < end; ++i) {
     if (model_->invMass[i] == 0.0) continue;  // pinned
     const bool hit = !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], velocity[i], restingAt(i));
-    sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
-    if (hit && adaptive()) lastContactTime_[i] = time_;
+    bookContact(i, hit);
     const bool damped = layers && colliders.dampInLayers(x_[i], velocity[i], dt_);
     hitAny = hitAny || hit || damped;
   }

@@ -205,6 +205,11 @@ class World {
   // recordCandidateContacts books the hits once the candidate is taken.
   double collideCandidate(std::size_t begin, std::size_t end, double h);
   void recordCandidateContacts(std::size_t begin, std::size_t end);
+  // Vertex i touched a static collider in the step just taken (hit) or not: its contact history.
+  void bookContact(std::size_t i, bool hit);
+  // How far a vertex with `velocity` that hits at `hit` is misplaced by getting its contact
+  // velocity at the end of a step h instead of at the hit: |dv| (1 - s) h [m].
+  double impactMisplacement(const Vec3& velocity, const ContactHit& hit, bool resting, double h) const;
   // One function per integrator: advances x_ and v_ by dt_ from time_, contacts included.
   void stepExplicitEuler();
   void stepSymplecticEuler();

@@ -76,9 +76,10 @@ int runCheck(const CheckOptions& options) {
                   scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
                   std::string(integratorName(scene.integrator)).c_str(), scene.tolerance, scene.duration);
     } else {
-      std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%d substeps), %g s\n", path.c_str(),
+      std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%s), %g s\n", path.c_str(),
                   scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
-                  std::string(integratorName(scene.integrator)).c_str(), scene.dt, scene.substeps, scene.duration);
+                  std::string(integratorName(scene.integrator)).c_str(), scene.dt, substepsText(scene.substeps).c_str(),
+                  scene.duration);
     }
     std::printf("  stages: forces [");
     for (std::size_t i = 0; i < world.forceStages().size(); ++i) {

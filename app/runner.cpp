@@ -158,6 +158,8 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
   return scene;
 }
 
+std::string substepsText(int count) { return std::to_string(count) + (count == 1 ? " substep" : " substeps"); }
+
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides) {
   World world(buildModel(scene), scene.integrator, stepSize(scene));
   if (world.adaptive()) world.setTolerance(scene.tolerance);

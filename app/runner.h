@@ -41,6 +41,9 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
 // SPRINGY_THREADS.
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides);
 
+// "1 substep", "3 substeps": a count of substeps as the messages say it.
+std::string substepsText(int count);
+
 // Steps `world` until `time` (within half a step; the adaptive step lands on it), checking the
 // monitor after the last step (and reporting an adaptive step that cannot meet its tolerance).
 // Returns the failure, if any. Stops early, with nothing to report, when interrupted() (a

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/runner.h"
 #include "sim/diagnostics.h"
 #include "sim/error.h"
 #include "sim/harness.h"
@@ -69,7 +70,7 @@ std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char
   std::vector<bool> restsAtFirstPass;
   std::string lastFailure;
   const auto run = [&](int substeps) -> std::string {
-    log << "springy: " << path << ": trying " << substeps << " substeps over the whole run (" << what << ")...\n"
+    log << "springy: " << path << ": trying " << substepsText(substeps) << " over the whole run (" << what << ")...\n"
         << std::flush;
     scene.substeps = substeps;
     PathSettings s;
@@ -92,8 +93,8 @@ std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char
   };
   const CountSearch found = searchCount(scene.substeps, kMaxSubsteps, kDoublings, searchUp, run);
   if (found.count == 0) {
-    throw Error(path + ": " + what + ": the run fails even at " + std::to_string(found.tries.back().count) +
-                " substeps: " + lastFailure);
+    throw Error(path + ": " + what + ": the run fails even at " + substepsText(found.tries.back().count) + ": " +
+                lastFailure);
   }
   scene.substeps = found.count;
   if (found.tries.size() == 1) return "";
@@ -103,11 +104,12 @@ std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char
     const bool passed = found.tries[i].failure.empty();
     said += i > 0 ? ", and " : "";
     said += passed ? "passed at " : "failed at ";
-    for (const std::size_t first = i; i < found.tries.size() && found.tries[i].failure.empty() == passed; ++i) {
+    const std::size_t first = i;
+    for (; i < found.tries.size() && found.tries[i].failure.empty() == passed; ++i) {
       said += (i > first ? ", " : "") + std::to_string(found.tries[i].count);
       if (!passed) said += " (" + found.tries[i].failure + ")";
     }
-    said += " substeps";
+    said += i == first + 1 && found.tries[first].count == 1 ? " substep" : " substeps";
   }
   return said;
 }
@@ -309,8 +311,8 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     const std::string tried = tryTheSubsteps(path, scene, "--substeps auto", threads, true, log);
     log << "springy: " << path << ": --substeps auto: " << scene.substeps << " (step " << seconds(stepSize(scene))
         << "; the survey's estimate of the stable limit for " << integratorName(scene.integrator)
-        << " over the whole run " << seconds(survey.dtMax) << " (" << surveyed
-        << " substeps), at t = " << number(survey.time) << " s in body '" << model.bodies[survey.body].name << "'"
+        << " over the whole run " << seconds(survey.dtMax) << " (" << substepsText(surveyed)
+        << "), at t = " << number(survey.time) << " s in body '" << model.bodies[survey.body].name << "'"
         << (survey.landing ? std::string(", set by the energy its landing may add")
                            : limitingMode(model.bodies[survey.body], survey))
         << "; at rest " << (std::isfinite(survey.atRest) ? seconds(survey.atRest) : std::string("any step")) << ")"
@@ -320,7 +322,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
     const std::string tried = tryTheSubsteps(path, scene, "the default step", threads, false, log);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
-        << scene.substeps << " substeps): the scene gives none, so the advisor's: at most " << margin
+        << substepsText(scene.substeps) << "): the scene gives none, so the advisor's: at most " << margin
         << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)
         << " (body '" << body << "'), a margin for impacts"
         << (tried.empty() ? std::string() : " (" + tried.substr(2) + ")") << contactNote << "\n";
@@ -328,8 +330,8 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     log << "springy: warning: " << path << ": the step " << seconds(stepSize(scene))
         << " exceeds the estimated stable limit " << seconds(r.dtMax) << " of " << integratorName(scene.integrator)
         << " (body '" << body << "': omega_max <= " << b.omegaMax << " rad/s, damping rate <= " << b.gammaMax
-        << " 1/s, 2/omega_max = " << seconds(2.0 / b.omegaMax) << "). Use --substeps auto (" << needed
-        << " substeps), a smaller dt, or `springy suggest " << path << "`." << contactNote << "\n";
+        << " 1/s, 2/omega_max = " << seconds(2.0 / b.omegaMax) << "). Use --substeps auto (" << substepsText(needed)
+        << "), a smaller dt, or `springy suggest " << path << "`." << contactNote << "\n";
   }
 }
 
@@ -346,9 +348,9 @@ int runSuggest(const SuggestOptions& options) {
     }
     const double h = stepSize(scene);
     const Model model = buildModel(scene);
-    std::printf("%s: %s, integrator %s, dt %g s, %d substeps (step %g s), horizon %g s\n", path.c_str(),
-                scene.name.c_str(), std::string(integratorName(scene.integrator)).c_str(), scene.dt, scene.substeps, h,
-                scene.duration);
+    std::printf("%s: %s, integrator %s, dt %g s, %s (step %g s), horizon %g s\n", path.c_str(), scene.name.c_str(),
+                std::string(integratorName(scene.integrator)).c_str(), scene.dt, substepsText(scene.substeps).c_str(),
+                h, scene.duration);
     for (uint32_t bi = 0; bi < model.bodies.size(); ++bi) {
       const BodyInfo& info = model.bodies[bi];
       const BodyDesc& desc = scene.bodies[bi];

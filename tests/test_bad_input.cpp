@@ -316,6 +316,18 @@ TEST_F(BadCommandLine, CheckNeverWritesItsTraceOverTheScene) {
   EXPECT_EQ(files(), std::vector<std::string>{"scene.toml"});
 }
 
+// The run's header counts its substeps in English: "1 substep", "3 substeps".
+TEST_F(BadCommandLine, TheHeaderSaysOneSubstepNotOneSubsteps) {
+  const std::string s = scene("shape = \"icosphere\"\nsubdivisions = 1", "dt = 0.002\nsubsteps = 1");
+  CommandResult r = runSpringy("check " + s + " --duration 0.01");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_HAS(r.output, " s (1 substep), ");
+  EXPECT_EQ(r.output.find("1 substeps"), std::string::npos) << r.output;
+  r = runSpringy("check " + s + " --duration 0.01 --substeps 3");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_HAS(r.output, " s (3 substeps), ");
+}
+
 // Reproduction 7: --substeps auto picked 1 substep for bunny_light, whose impacts need more (the
 // estimate at rest). It now surveys the whole run (tests/test_study.cpp, Advice.SubstepsAutoHolds...)
 // and its count replaces the scene's own both ways: fewer for a soft body, more for a stiff one.
@@ -327,7 +339,7 @@ TEST_F(BadCommandLine, SubstepsAutoReplacesTheScenesOwnCount) {
   ASSERT_NE(at, std::string::npos) << r.output;
   const int soft = std::stoi(r.output.substr(at + 17));
   EXPECT_LT(soft, 7) << r.output;
-  EXPECT_HAS(r.output, "(" + std::to_string(soft) + " substeps)");
+  EXPECT_HAS(r.output, "(" + std::to_string(soft) + (soft == 1 ? " substep)" : " substeps)"));
   const std::string stiff = scene("shape = \"icosphere\"\nsubdivisions = 1\nstrut_period = 0.002", "dt = 0.004\nsubsteps = 2");
   r = runSpringy("check " + stiff + " --substeps auto --duration 0.1");
   EXPECT_EQ(r.status, 0) << r.output;

@@ -11,10 +11,11 @@
 
 #include "app/atomic_file.h"
 #include "app/commands.h"
+#include "app/csv.h"
 #include "app/progress.h"
 #include "app/runner.h"
-#include "sim/implicit.h"
 #include "sim/error.h"
+#include "sim/implicit.h"
 
 namespace springy {
 namespace {
@@ -24,11 +25,12 @@ void writeTraceHeader(std::ostream& out) {
 }
 
 void writeTraceRow(std::ostream& out, const std::string& scene, double t, const std::string& body, const BodyMeasures& m) {
-  char line[512];
-  std::snprintf(line, sizeof line, ",%.6f,%s,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n", t, body.c_str(),
-                m.centroid.x, m.centroid.y, m.centroid.z, m.volume, m.kinetic, m.gravitational, m.elastic, m.total(),
-                m.maxStrain);
-  out << scene << line;
+  char numbers[256];
+  std::snprintf(numbers, sizeof numbers, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n", m.centroid.x, m.centroid.y,
+                m.centroid.z, m.volume, m.kinetic, m.gravitational, m.elastic, m.total(), m.maxStrain);
+  char time[32];
+  std::snprintf(time, sizeof time, ",%.6f,", t);
+  out << csvField(scene) << time << csvField(body) << numbers;
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <map>
 
 #include "app/atomic_file.h"
+#include "app/csv.h"
 #include "app/sweep.h"
 #include "sim/error.h"
 
@@ -21,13 +22,6 @@ namespace springy {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string csvField(const std::string& text) {
-  if (text.find_first_of(",\"\n\r") == std::string::npos) return text;
-  std::string out = "\"";
-  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
 
 // A point's value as a table cell: a string as it is, numbers and arrays as JSON.
 std::string cell(const Json& value) { return value.is_string() ? value.get<std::string>() : value.dump(); }

@@ -4,10 +4,12 @@
 
 #include "run_springy.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 
@@ -133,6 +135,34 @@ TEST_F(AppTest, TraceIsWrittenWithOneRowPerFrameAndBody) {
   while (std::getline(in, line)) ++rows;
   EXPECT_EQ(rows, 10);  // 1 s at 10 frames/s, one body
   EXPECT_EQ(filesIn(dir_), 1u);
+}
+
+// Names are the user's text: one with a comma or a quote is quoted in the trace (RFC 4180), so
+// every row still has the header's twelve fields.
+TEST_F(AppTest, TraceQuotesNamesThatHoldCommasOrQuotes) {
+  std::ifstream tiny(data("tiny.toml"));
+  std::string text((std::istreambuf_iterator<char>(tiny)), std::istreambuf_iterator<char>());
+  text.replace(text.find("name = \"Tiny\""), 13, "name = 'Tiny, \"quoted\"'");
+  text.replace(text.find("name = \"ball\""), 13, "name = \"ball, one\"");
+  const fs::path scene = dir_ / "named.toml", trace = dir_ / "trace.csv";
+  { std::ofstream(scene) << text; }
+  const Result r = run("check " + scene.string() + " --trace " + trace.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream in(trace);
+  std::string header, row;
+  ASSERT_TRUE(std::getline(in, header) && std::getline(in, row));
+  EXPECT_EQ(row.rfind("\"Tiny, \"\"quoted\"\"\",", 0), 0u) << row;
+  EXPECT_NE(row.find(",\"ball, one\","), std::string::npos) << row;
+  // Outside the quotes, as many commas as the header has.
+  std::size_t commas = 0;
+  bool quoted = false;
+  for (const char c : row) {
+    if (c == '"')
+      quoted = !quoted;
+    else if (c == ',' && !quoted)
+      ++commas;
+  }
+  EXPECT_EQ(commas, static_cast<std::size_t>(std::count(header.begin(), header.end(), ','))) << row;
 }
 
 TEST_F(AppTest, RenderWritesAVideoAndNoTemporaryFiles) {

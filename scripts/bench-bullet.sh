@@ -67,6 +67,15 @@ springy_run() {
     END { printf "%s %s %s %s %s %s %s %s\n", st, steps, wall, vmin, integ, dt, (threads == "" ? 1 : threads), strain }' <<<"$out"
 }
 
+# springy_apex SCENE: the centre's highest point from t = 0.7 s on (the first bounce's apex; the
+# ball lands at 0.55 s), from a run of its own with --trace (not timed). The trace's columns
+# counted from the end: a quoted scene name may hold commas.
+springy_apex() {
+  local trace="$tmp/apex.csv"
+  "$springy" check "$1" --trace "$trace" >/dev/null 2>&1 || true
+  awk -F, 'NR > 1 && $(NF - 10) >= 0.7 && (m == "" || $(NF - 7) > m) { m = $(NF - 7) } END { printf "%.3f", m }' "$trace"
+}
+
 # bullet_run ARGS...: the key=value result line of one bullet_ball run.
 bullet_run() { "$bullet" --quiet "$@" || true; }
 field() { grep -o "$1=[^ ]*" <<<"$2" | cut -d= -f2; }
@@ -96,7 +105,7 @@ if [ "$mode" = bench ]; then
     bullet_run --dt "$stock_dt" --piterations "$stock_iter" --bending 2 >>"$tmp/stock"
   done
   # summarise FILE KIND -> "ok|FAIL median_wall min_volume dt iterations-or-integrator ns threads"
-  springy_row() {  # FILE LABEL MODEL
+  springy_row() {  # FILE LABEL MODEL SCENE
     local f=$1 label=$2 model=$3 wall steps vmin integ dt threads status ns strain
     [ -s "$f" ] || return 0
     status=$(awk '$1 != "ok" { bad = 1 } END { print bad ? "FAIL" : "ok" }' "$f")
@@ -107,8 +116,8 @@ if [ "$mode" = bench ]; then
     strain=$(awk 'NR == 1 { print $8 }' "$f")
     ns=$(awk -v w="$wall" -v s="$steps" -v n="$vertices" 'BEGIN { printf "%.0f", 1e9 * w / (s * n) }')
     echo "$wall" >"$f.median"
-    printf '| %s (%s thread%s) | %s | %s | %s | — | %s | %.3f | %.3f | %s | %s |%s\n' "$label" "$threads" \
-      "$([ "$threads" = 1 ] || echo s)" "$model" "$integ" "$dt" "$vmin" "$strain" "$wall" "$ns" \
+    printf '| %s (%s thread%s) | %s | %s | %s | — | %s | %.3f | %s | %.3f | %s | %s |%s\n' "$label" "$threads" \
+      "$([ "$threads" = 1 ] || echo s)" "$model" "$integ" "$dt" "$vmin" "$strain" "$(springy_apex "$4")" "$wall" "$ns" \
       "$(awk -v b="$bullet_median" -v s="$wall" 'BEGIN { printf "%.2f", b / s }')" "$([ "$status" = ok ] || echo ' FAILED')"
   }
   bullet_row() {  # FILE LABEL MODEL
@@ -117,9 +126,9 @@ if [ "$mode" = bench ]; then
     wall=$(while read -r line; do field wall_s "$line"; done <"$f" | median)
     ns=$(while read -r line; do field ns_per_vertex_step "$line"; done <"$f" | median)
     line=$(head -1 "$f")
-    printf '| %s | %s | position-based links (PBD) | %s (1/%.0f) | %s | %.4f | %.3f | %.3f | %.0f | |%s\n' "$label" \
+    printf '| %s | %s | position-based links (PBD) | %s (1/%.0f) | %s | %.4f | %.3f | %.3f | %.3f | %.0f | |%s\n' "$label" \
       "$model" "$(field dt "$line")" "$(awk -v d="$(field dt "$line")" 'BEGIN { print 1 / d }')" "$(field piterations "$line")" \
-      "$(field min_volume "$line")" "$(field max_strain "$line")" "$wall" "$ns" \
+      "$(field min_volume "$line")" "$(field max_strain "$line")" "$(field apex_y "$line")" "$wall" "$ns" \
       "$([ "$status" = "$runs" ] || echo ' FAILED')"
   }
   echo
@@ -127,15 +136,16 @@ if [ "$mode" = bench ]; then
   echo "springy: \`springy check SCENE --min-volume 0.95\` (wall[s] column: model set-up + simulation + monitor)."
   echo "Bullet: \`bullet_ball --dt DT --piterations N --bending D\` (loop wall time: steps + volume and edge strain every step)."
   echo "max edge strain: the largest |l - l0| / l0 of a mesh edge during the run (springy check's \"max strain\")."
+  echo "bounce: the centre's highest point from t = 0.7 s on (the first bounce's apex; it lands at 0.55 s with its centre at 0.5 m)."
   echo "bullet / springy: Bullet's chosen setting (the first Bullet row) over the row's time."
   echo
   bullet_median=$(while read -r l; do field wall_s "$l"; done <"$tmp/bullet" | median)
-  echo "| simulator | model | integrator / solver | dt [s] | iterations | min volume | max edge strain | wall time median [s] | ns / vertex / step | bullet / springy |"
-  echo "|---|---|---|---|---|---|---|---|---|---|"
-  springy_row "$tmp/gas" springy "struts + gas ($gas_scene)"
-  springy_row "$tmp/gas1" springy "struts + gas ($gas_scene)"
-  springy_row "$tmp/springy" springy "struts + hinges ($scene)"
-  springy_row "$tmp/springy1" springy "struts + hinges ($scene)"
+  echo "| simulator | model | integrator / solver | dt [s] | iterations | min volume | max edge strain | bounce [m] | wall time median [s] | ns / vertex / step | bullet / springy |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|"
+  springy_row "$tmp/gas" springy "struts + gas ($gas_scene)" "$gas_scene"
+  springy_row "$tmp/gas1" springy "struts + gas ($gas_scene)" "$gas_scene"
+  springy_row "$tmp/springy" springy "struts + hinges ($scene)" "$scene"
+  springy_row "$tmp/springy1" springy "struts + hinges ($scene)" "$scene"
   bullet_row "$tmp/bullet" "Bullet 3.24" "edge links + bending links at distance $bullet_bending"
   bullet_row "$tmp/pressure" "Bullet 3.24 (pressure)" "edge links + bending links at distance $bullet_bending + pressure (kPR $pressure_kpr)"
   bullet_row "$tmp/stock" "Bullet 3.24 (stock bending)" "edge links + bending links at distance 2"

@@ -89,9 +89,10 @@ int runCheck(const CheckOptions& options) {
     }
     std::printf("], collide: %s, contact between bodies: %s, threads: %u\n", world.collides() ? "yes" : "no",
                 world.bodyContacts() ? "yes" : "no", world.threads());
-    // Sample at the render frame rate: the states a video would show are the ones checked.
+    // Sample at the render frame rate: the states a video would show are the ones checked. At
+    // least one frame, as `render` draws (a duration under half a frame ran nothing and said ok).
     const double frame = 1.0 / scene.view.render.fps;
-    const long frames = std::lround(scene.duration / frame);
+    const long frames = std::max(1L, std::lround(scene.duration / frame));
     std::optional<Failure> failure;
     // At rest at the end (RestWatch): the frames of the last second.
     const double watchFrom = scene.duration - RestWatch::kWindow;

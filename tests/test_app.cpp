@@ -137,6 +137,16 @@ TEST_F(AppTest, TraceIsWrittenWithOneRowPerFrameAndBody) {
   EXPECT_EQ(filesIn(dir_), 1u);
 }
 
+// A duration under half a frame still runs one frame, as `render` draws one (it ran no step and
+// said "ok").
+TEST_F(AppTest, ADurationUnderHalfAFrameRunsOneFrame) {
+  const Result r = run("check " + data("tiny.toml") + " --duration 0.01");  // frames of 0.1 s, steps of 5 ms
+  ASSERT_EQ(r.status, 0) << r.output;
+  const std::size_t row = r.output.find("\n  ball ");
+  ASSERT_NE(row, std::string::npos) << r.output;
+  EXPECT_EQ(std::stoi(r.output.substr(row + 8)), 20) << r.output;  // one frame: 0.1 s / 0.005 s
+}
+
 // Names are the user's text: one with a comma or a quote is quoted in the trace (RFC 4180), so
 // every row still has the header's twelve fields.
 TEST_F(AppTest, TraceQuotesNamesThatHoldCommasOrQuotes) {

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 #include "app/atomic_file.h"
 #include "app/commands.h"
@@ -54,8 +56,9 @@ int runCheck(const CheckOptions& options) {
     record.path = path;
     record.scene = std::filesystem::path(path).stem().string();
     SceneDesc scene;
+    bool untried = false;  // the advisor's default step, which this run tries (adviseTimeStep)
     try {
-      scene = loadSceneWith(path, options.overrides);
+      scene = loadSceneWith(path, options.overrides, true, &untried);
     } catch (const Error& e) {
       std::cerr << "springy check: " << e.what() << "\n";
       record.status = SceneRecord::Status::Error;
@@ -66,54 +69,89 @@ int runCheck(const CheckOptions& options) {
     record.scene = scene.name;
     record.integrator = std::string(integratorName(scene.integrator));
     record.dt = scene.dt;
-    record.substeps = scene.substeps;
     record.duration = scene.duration;
-    const auto wallStart = std::chrono::steady_clock::now();
-    World world = makeWorld(scene, options.overrides);
     MonitorLimits limits;
     limits.minVolume = options.minVolume;
-    Monitor monitor(world, limits);
-    if (world.adaptive()) {
-      std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s (adaptive), tolerance %g, %g s\n", path.c_str(),
-                  scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
-                  std::string(integratorName(scene.integrator)).c_str(), scene.tolerance, scene.duration);
-    } else {
-      std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%s), %g s\n", path.c_str(),
-                  scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
-                  std::string(integratorName(scene.integrator)).c_str(), scene.dt, substepsText(scene.substeps).c_str(),
-                  scene.duration);
-    }
-    std::printf("  stages: forces [");
-    for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
-      std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
-    }
-    std::printf("], collide: %s, contact between bodies: %s, threads: %u\n", world.collides() ? "yes" : "no",
-                world.bodyContacts() ? "yes" : "no", world.threads());
-    // Sample at the render frame rate: the states a video would show are the ones checked. At
-    // least one frame, as `render` draws (a duration under half a frame ran nothing and said ok).
-    const double frame = 1.0 / scene.view.render.fps;
-    const long frames = std::max(1L, std::lround(scene.duration / frame));
+    std::optional<World> worldSlot;
+    std::optional<Monitor> monitorSlot;
     std::optional<Failure> failure;
-    // At rest at the end (RestWatch): the frames of the last second.
-    const double watchFrom = scene.duration - RestWatch::kWindow;
     RestWatch rest;
-    // A long run shows that it is alive (stderr: a bar on a terminal, a line every 5 s in a log).
-    Progress progress(path, frames);
-    for (long k = 1; k <= frames && !failure; ++k) {
-      if (interrupted()) {
-        std::cerr << "springy check: interrupted\n";
-        return interruptedExitStatus();
+    std::ostringstream tried;  // the trace rows of a run that is the default step's try, kept until it passes
+    auto wallStart = std::chrono::steady_clock::now();
+    bool retryFailed = false;
+    // One run; a second only when it was the default step's try and went unstable (an untried
+    // default step was run twice before: once as the advisor's try, once as the check).
+    for (;;) {
+      wallStart = std::chrono::steady_clock::now();
+      World& world = worldSlot.emplace(makeWorld(scene, options.overrides));
+      Monitor& monitor = monitorSlot.emplace(world, limits);
+      if (world.adaptive()) {
+        std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s (adaptive), tolerance %g, %g s\n", path.c_str(),
+                    scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
+                    std::string(integratorName(scene.integrator)).c_str(), scene.tolerance, scene.duration);
+      } else {
+        std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%s), %g s\n", path.c_str(),
+                    scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
+                    std::string(integratorName(scene.integrator)).c_str(), scene.dt,
+                    substepsText(scene.substeps).c_str(), scene.duration);
       }
-      failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
-      progress.update(k, std::to_string(world.stepCount()) + " steps");
-      if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
-      if (trace.is_open()) {
-        for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
-          writeTraceRow(trace, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
+      std::printf("  stages: forces [");
+      for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
+        std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
+      }
+      std::printf("], collide: %s, contact between bodies: %s, threads: %u\n", world.collides() ? "yes" : "no",
+                  world.bodyContacts() ? "yes" : "no", world.threads());
+      std::fflush(stdout);
+      // Sample at the render frame rate: the states a video would show are the ones checked. At
+      // least one frame, as `render` draws (a duration under half a frame ran nothing and said ok).
+      const double frame = 1.0 / scene.view.render.fps;
+      const long frames = std::max(1L, std::lround(scene.duration / frame));
+      failure.reset();
+      // At rest at the end (RestWatch): the frames of the last second.
+      const double watchFrom = scene.duration - RestWatch::kWindow;
+      rest = RestWatch{};
+      tried.str("");
+      std::ostream& rows = untried ? static_cast<std::ostream&>(tried) : trace;
+      // A long run shows that it is alive (stderr: a bar on a terminal, a line every 5 s in a log).
+      Progress progress(path, frames);
+      for (long k = 1; k <= frames && !failure; ++k) {
+        if (interrupted()) {
+          std::cerr << "springy check: interrupted\n";
+          return interruptedExitStatus();
+        }
+        failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
+        progress.update(k, std::to_string(world.stepCount()) + " steps");
+        if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
+        if (trace.is_open()) {
+          for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
+            writeTraceRow(rows, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
+          }
         }
       }
+      progress.finish();
+      if (!failure || !untried || failure->criterion) break;
+      untried = false;
+      char after[64];
+      std::snprintf(after, sizeof after, "after t = %.3g s", failure->time);
+      try {
+        retryDefaultStep(path, scene, after,
+                         options.overrides.threads ? *options.overrides.threads : defaultThreadCount(), std::cerr);
+      } catch (const Error& e) {
+        std::cerr << "springy check: " << e.what() << "\n";
+        record.status = SceneRecord::Status::Error;
+        record.message = e.what();
+        retryFailed = true;
+        break;
+      }
     }
-    progress.finish();
+    if (retryFailed) {
+      ++failures;
+      continue;
+    }
+    record.substeps = scene.substeps;
+    World& world = *worldSlot;
+    Monitor& monitor = *monitorSlot;
+    if (trace.is_open()) trace << tried.str();  // the try passed: its rows are the run's
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wallStart).count();
     record.wall = wall;
     std::printf("  %-16s %9s %8s %8s %10s %10s %9s %10s %10s %10s %10s %s\n", "body", "steps", "sim[s]", "wall[s]",

@@ -56,9 +56,17 @@ int runFrames(const FramesOptions& options);
 // over the whole run and doubled or halved until it is within a factor 2 of the fewest that pass.
 // Default (neither the scene nor the command line gave dt or substeps): the estimate at rest with
 // the margin that holds through impacts (impactMargin, sim/setup.h), tried and doubled until it
-// passes. Both say what they chose. The tries run on `threads` threads.
+// passes. Both say what they chose. The tries run on `threads` threads. With `runIsTry` (check,
+// whose own run is monitored as a try is), the default step is not tried first: the caller runs
+// it and, if its run fails, calls retryDefaultStep.
 enum class StepChoice { Warn, AutoSubsteps, Default };
-void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, unsigned threads, std::ostream& log);
+void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, unsigned threads, std::ostream& log,
+                    bool runIsTry = false);
+// The default step's run failed (`failure`, at scene.substeps): tries twice the count and on,
+// doubling, as adviseTimeStep does, sets scene.substeps to the count that passed and says so;
+// throws springy::Error when none does.
+void retryDefaultStep(const std::string& path, SceneDesc& scene, const std::string& failure, unsigned threads,
+                      std::ostream& log);
 
 struct SuggestOptions {
   std::vector<std::string> scenes;

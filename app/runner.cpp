@@ -109,7 +109,7 @@ SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::strin
   }
 }
 
-SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise) {
+SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise, bool* runIsTry) {
   SceneDesc scene = loadSceneSetting(path, overrides.sets);
   for (const BodyDesc& b : scene.bodies) {
     if (advise && !b.note.empty()) {
@@ -150,7 +150,10 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     const StepChoice choice = overrides.autoSubsteps ? StepChoice::AutoSubsteps
                               : !scene.stepGiven && !overrides.dt && !overrides.substeps ? StepChoice::Default
                                                                                          : StepChoice::Warn;
-    adviseTimeStep(path, scene, choice, overrides.threads ? *overrides.threads : defaultThreadCount(), std::cerr);
+    const bool deferred = runIsTry != nullptr && choice == StepChoice::Default;
+    adviseTimeStep(path, scene, choice, overrides.threads ? *overrides.threads : defaultThreadCount(), std::cerr,
+                   deferred);
+    if (runIsTry) *runIsTry = deferred;
   }
   if (auto problem = runSettingsProblem(scene)) {
     throw Error(path + ": with the command line's settings, " + *problem);

@@ -34,7 +34,10 @@ SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::strin
 // Loads a scene and applies the overrides. Throws springy::Error. advise: run the stability
 // advisor (warn on stderr when the step exceeds its estimate; pick --substeps auto) and print the
 // bodies' notes; without it nothing is printed (a sweep validating its points).
-SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise = true);
+// With `runIsTry` (check), a default step is not tried first (adviseTimeStep); *runIsTry then
+// says whether the step is such an untried default, for the caller to run as its try.
+SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise = true,
+                        bool* runIsTry = nullptr);
 
 // The scene's world, stepping on the requested threads (World::setThreads: small models stay
 // on one; results are bit-identical for every count). Throws springy::Error for a bad

@@ -263,7 +263,8 @@ void printSquash(const SceneDesc& scene, const Model& model, double keepVolume) 
 
 }  // namespace
 
-void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, unsigned threads, std::ostream& log) {
+void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, unsigned threads, std::ostream& log,
+                    bool runIsTry) {
   const Model model = buildModel(scene);
   const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, scene.duration);
   const BodyStability& b = r.bodies.empty() ? BodyStability{} : r.bodies[r.limitingBody];
@@ -320,6 +321,13 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   } else if (choice == StepChoice::Default) {
     const double margin = impactMargin(scene);
     scene.substeps = safeSubsteps(scene.dt, r.dtMax, margin);
+    if (runIsTry) {
+      log << "springy: " << path << ": " << substepsText(scene.substeps) << " of dt " << seconds(scene.dt) << " (step "
+          << seconds(stepSize(scene)) << "): the scene gives none, so the advisor's: at most " << margin
+          << " of the estimated stable limit " << seconds(r.dtMax) << " for " << integratorName(scene.integrator)
+          << " (body '" << body << "'), a margin for impacts; this run is its try" << contactNote << "\n";
+      return;
+    }
     const std::string tried = tryTheSubsteps(path, scene, "the default step", threads, false, log);
     log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
         << substepsText(scene.substeps) << "): the scene gives none, so the advisor's: at most " << margin
@@ -333,6 +341,20 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
         << " 1/s, 2/omega_max = " << seconds(2.0 / b.omegaMax) << "). Use --substeps auto (" << substepsText(needed)
         << "), a smaller dt, or `springy suggest " << path << "`." << contactNote << "\n";
   }
+}
+
+void retryDefaultStep(const std::string& path, SceneDesc& scene, const std::string& failure, unsigned threads,
+                      std::ostream& log) {
+  const int failed = scene.substeps;
+  if (failed >= kMaxSubsteps) {
+    throw Error(path + ": the default step: the run fails even at " + substepsText(failed) + ": " + failure);
+  }
+  log << "springy: " << path << ": the run failed at " << substepsText(failed) << " (" << failure << ")\n";
+  scene.substeps = std::min(2 * failed, kMaxSubsteps);
+  const std::string tried = tryTheSubsteps(path, scene, "the default step", threads, false, log);
+  log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
+      << substepsText(scene.substeps) << "): the advisor's default step failed at " << substepsText(failed)
+      << (tried.empty() ? "; the run passed at " + substepsText(scene.substeps) : tried) << "\n";
 }
 
 int runSuggest(const SuggestOptions& options) {

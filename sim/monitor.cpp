@@ -206,13 +206,16 @@ std::optional<Failure> Monitor::check(const World& world) {
         std::ostringstream s;
         s << "its volume fell to " << 100.0 * ratio << "% of rest, below the required " << 100.0 * limits_.minVolume
           << "%";
-        return fail(s.str(), info.membraneModulus > 0.0
-                                 ? "The body is too soft to keep its shape: try a shorter bend_period or stretch_period "
-                                   "(`springy suggest --keep-volume` finds them), or a gas (volume_period)."
-                                 : "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
-                                   "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
-                                   "strut_period, or the body material (scenes/README.md), which means the same at "
-                                   "every resolution.");
+        Failure failure =
+            fail(s.str(), info.membraneModulus > 0.0
+                              ? "The body is too soft to keep its shape: try a shorter bend_period or stretch_period "
+                                "(`springy suggest --keep-volume` finds them), or a gas (volume_period)."
+                              : "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
+                                "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
+                                "strut_period, or the body material (scenes/README.md), which means the same at "
+                                "every resolution.");
+        failure.criterion = true;
+        return failure;
       }
     }
   }

@@ -29,7 +29,8 @@ struct Failure {
   uint32_t body;
   uint64_t step;
   double time;
-  std::string message;  // complete, ready to print
+  std::string message;     // complete, ready to print
+  bool criterion = false;  // a limit the run was given (MonitorLimits::minVolume), not an instability
 };
 
 // Per-body running extremes, for reports.

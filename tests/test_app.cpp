@@ -137,6 +137,20 @@ TEST_F(AppTest, TraceIsWrittenWithOneRowPerFrameAndBody) {
   EXPECT_EQ(filesIn(dir_), 1u);
 }
 
+// A scene that gives no step runs at the advisor's default, and check's run is its try: the
+// trace holds that run's rows, one per frame and body, written once the run passed.
+TEST_F(AppTest, TheDefaultStepsTryIsTheTracedRun) {
+  const fs::path trace = dir_ / "trace.csv";
+  const Result r = run("check " + data("cloth.toml") + " --trace " + trace.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("this run is its try"), std::string::npos) << r.output;
+  std::ifstream in(trace);
+  std::string line;
+  int rows = -1;  // header
+  while (std::getline(in, line)) ++rows;
+  EXPECT_EQ(rows, 10);  // 0.5 s at 10 frames/s, two bodies
+}
+
 // A duration under half a frame still runs one frame, as `render` draws one (it ran no step and
 // said "ok").
 TEST_F(AppTest, ADurationUnderHalfAFrameRunsOneFrame) {

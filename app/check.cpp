@@ -18,6 +18,7 @@
 #include "app/runner.h"
 #include "sim/error.h"
 #include "sim/implicit.h"
+#include "sim/trajectory.h"
 
 namespace springy {
 namespace {
@@ -105,7 +106,7 @@ int runCheck(const CheckOptions& options) {
       // Sample at the render frame rate: the states a video would show are the ones checked. At
       // least one frame, as `render` draws (a duration under half a frame ran nothing and said ok).
       const double frame = 1.0 / scene.view.render.fps;
-      const long frames = std::max(1L, std::lround(scene.duration / frame));
+      const long frames = frameCount(scene.duration, frame);
       failure.reset();
       // At rest at the end (RestWatch): the frames of the last second.
       const double watchFrom = scene.duration - RestWatch::kWindow;
@@ -134,8 +135,7 @@ int runCheck(const CheckOptions& options) {
       char after[64];
       std::snprintf(after, sizeof after, "after t = %.3g s", failure->time);
       try {
-        retryDefaultStep(path, scene, after,
-                         options.overrides.threads ? *options.overrides.threads : defaultThreadCount(), std::cerr);
+        retryDefaultStep(path, scene, after, threadCount(options.overrides), std::cerr);
       } catch (const Error& e) {
         std::cerr << "springy check: " << e.what() << "\n";
         record.status = SceneRecord::Status::Error;

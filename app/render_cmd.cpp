@@ -23,6 +23,7 @@
 #include "render/image.h"
 #include "render/video_encoder.h"
 #include "sim/error.h"
+#include "sim/trajectory.h"
 
 namespace springy {
 namespace {
@@ -192,7 +193,7 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
 
   FramePipelineSettings pipeline;
   pipeline.label = scene.name;
-  pipeline.frames = std::max(1L, std::lround(scene.duration * scene.view.render.fps));
+  pipeline.frames = frameCount(scene.duration, 1.0 / scene.view.render.fps);
   pipeline.fps = scene.view.render.fps;
   pipeline.width = scene.view.render.width;
   pipeline.height = scene.view.render.height;

@@ -151,8 +151,7 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
                               : !scene.stepGiven && !overrides.dt && !overrides.substeps ? StepChoice::Default
                                                                                          : StepChoice::Warn;
     const bool deferred = runIsTry != nullptr && choice == StepChoice::Default;
-    adviseTimeStep(path, scene, choice, overrides.threads ? *overrides.threads : defaultThreadCount(), std::cerr,
-                   deferred);
+    adviseTimeStep(path, scene, choice, threadCount(overrides), std::cerr, deferred);
     if (runIsTry) *runIsTry = deferred;
   }
   if (auto problem = runSettingsProblem(scene)) {
@@ -161,12 +160,16 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
   return scene;
 }
 
+unsigned threadCount(const RunOverrides& overrides) {
+  return overrides.threads ? *overrides.threads : defaultThreadCount();
+}
+
 std::string substepsText(int count) { return std::to_string(count) + (count == 1 ? " substep" : " substeps"); }
 
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides) {
   World world(buildModel(scene), scene.integrator, stepSize(scene));
   if (world.adaptive()) world.setTolerance(scene.tolerance);
-  world.setThreads(overrides.threads ? *overrides.threads : defaultThreadCount());
+  world.setThreads(threadCount(overrides));
   return world;
 }
 

@@ -44,6 +44,9 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
 // SPRINGY_THREADS.
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides);
 
+// The simulation threads the overrides ask for: --threads, else defaultThreadCount().
+unsigned threadCount(const RunOverrides& overrides);
+
 // "1 substep", "3 substeps": a count of substeps as the messages say it.
 std::string substepsText(int count);
 

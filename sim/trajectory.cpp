@@ -27,7 +27,7 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
   world.setThreads(settings.threads);
   Monitor monitor(world);
   RunPath path;
-  const long frames = std::max(1L, std::lround(settings.duration / settings.frame));  // as `check` and `render`
+  const long frames = frameCount(settings.duration, settings.frame);
   const auto sample = [&] {
     path.times.push_back(world.time());
     path.centroid.emplace_back();

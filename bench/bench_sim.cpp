@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "sim/contact.h"
+#include "sim/diagnostics.h"
 #include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/model.h"
@@ -265,6 +266,30 @@ void BM_GasBallStep(benchmark::State& state) {
   nsPer(state, "ns_per_vertex", static_cast<double>(model.vertexCount()));
 }
 BENCHMARK(BM_GasBallStep)->Arg(1)->Arg(2)->UseRealTime();
+
+// The monitor's sample of that ball (measureBody: energies, strain, volume, bounds), which
+// `springy check` takes once per output frame: at the bench scene's 120 frames/s, once every
+// 4.8 steps. Taken half-way through the fall and bounce (t = 0.6 s, just after the impact).
+void BM_GasBallMeasure(benchmark::State& state) {
+  Model model;
+  BodyDesc desc = ballDesc(4);
+  desc.strutPeriod = 0.015;
+  desc.hingePeriod = 0.0;
+  desc.volumePeriod = 0.01;
+  addBody(model, desc);
+  model.colliders.planes.push_back(PlaneCollider{{0, 0, 0}, {0, 1, 0}, 0.6, 0.3});
+  World world(model, Integrator::SymplecticEuler, 0.0015);
+  world.setThreads(static_cast<unsigned>(state.range(0)), 0);
+  while (world.time() < 0.6) world.step();
+  double sink = 0.0;
+  for (auto _ : state) {
+    const BodyMeasures m = measureBody(world, 0);
+    sink += m.kinetic + m.volume;
+  }
+  benchmark::DoNotOptimize(sink);
+  nsPer(state, "ns_per_vertex", static_cast<double>(model.vertexCount()));
+}
+BENCHMARK(BM_GasBallMeasure)->Arg(1)->Arg(2)->UseRealTime();
 
 // The machine: one cache-line round trip between two threads (each waits for the other's
 // write). What a fork-join and every vertex one core writes and the other reads cost; on a

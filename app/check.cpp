@@ -130,12 +130,9 @@ int runCheck(const CheckOptions& options) {
         }
       }
       progress.finish();
-      if (!failure || !untried || failure->criterion) break;
-      untried = false;
-      char after[64];
-      std::snprintf(after, sizeof after, "after t = %.3g s", failure->time);
+      if (!failure) break;
       try {
-        retryDefaultStep(path, scene, after, threadCount(options.overrides), std::cerr);
+        if (!retryDefaultStep(path, scene, *failure, untried, threadCount(options.overrides), std::cerr)) break;
       } catch (const Error& e) {
         std::cerr << "springy check: " << e.what() << "\n";
         record.status = SceneRecord::Status::Error;

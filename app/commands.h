@@ -57,16 +57,19 @@ int runFrames(const FramesOptions& options);
 // Default (neither the scene nor the command line gave dt or substeps): the estimate at rest with
 // the margin that holds through impacts (impactMargin, sim/setup.h), tried and doubled until it
 // passes. Both say what they chose. The tries run on `threads` threads. With `runIsTry` (check,
-// whose own run is monitored as a try is), the default step is not tried first: the caller runs
-// it and, if its run fails, calls retryDefaultStep.
+// render and frames, whose own runs are monitored as a try is), the default step is not tried
+// first: the caller runs it and, if its run fails, calls retryDefaultStep.
 enum class StepChoice { Warn, AutoSubsteps, Default };
 void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice, unsigned threads, std::ostream& log,
                     bool runIsTry = false);
-// The default step's run failed (`failure`, at scene.substeps): tries twice the count and on,
-// doubling, as adviseTimeStep does, sets scene.substeps to the count that passed and says so;
-// throws springy::Error when none does.
-void retryDefaultStep(const std::string& path, SceneDesc& scene, const std::string& failure, unsigned threads,
-                      std::ostream& log);
+// A run that was the default step's try (`untried`: check, render and frames with runIsTry)
+// failed: unless the failure is a limit the run was given (Failure::criterion), tries twice the
+// count and on, doubling, as adviseTimeStep does, sets scene.substeps to the count that passed,
+// says so, clears `untried` and returns true: the caller runs the scene again. False when the run
+// was no try or the failure a criterion (the caller reports it); throws springy::Error when no
+// count up to kMaxSubsteps passes.
+bool retryDefaultStep(const std::string& path, SceneDesc& scene, const Failure& failure, bool& untried,
+                      unsigned threads, std::ostream& log);
 
 struct SuggestOptions {
   std::vector<std::string> scenes;

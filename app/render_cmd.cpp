@@ -171,59 +171,68 @@ void printSummary(const std::string& path, const std::string& outPath, const Sce
 
 int renderOne(const std::string& path, const std::string& outPath, const RenderOptions& options,
               const RenderEnvironment& env) {
-  SceneDesc scene = loadSceneWith(path, options.overrides);
+  // A scene that gives no step: the drawn run is the try of the advisor's default step, as
+  // check's run is (a separate try simulated the whole scene once more before drawing).
+  bool untried = false;
+  SceneDesc scene = loadSceneWith(path, options.overrides, true, &untried);
   applyRenderOverrides(scene, options.render);
   checkCamera(scene);
   // An unwritable target fails here, before any simulation; no scene is ever written over.
   AtomicFile output(outPath, options.scenes);
-  World world = makeWorld(scene, options.overrides);
-  Monitor monitor(world);
-  render::RenderSettings rs = renderSettingsOf(scene);
-  rs.profilePasses = env.profilePasses;
-  if (env.msaa) rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
-  SceneView view(scene, world, rs);
+  for (;;) {
+    World world = makeWorld(scene, options.overrides);
+    Monitor monitor(world);
+    render::RenderSettings rs = renderSettingsOf(scene);
+    rs.profilePasses = env.profilePasses;
+    if (env.msaa) rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
+    SceneView view(scene, world, rs);
 
-  render::VideoEncoder::setLibraryLogging(false);
-  render::VideoEncoder encoder;
-  try {
-    encoder.open(output.temporaryPath(), videoSettingsOf(scene, env));
-  } catch (const render::RenderError& e) {
-    videoFailed(output, e);
-  }
+    render::VideoEncoder::setLibraryLogging(false);
+    render::VideoEncoder encoder;
+    try {
+      encoder.open(output.temporaryPath(), videoSettingsOf(scene, env));
+    } catch (const render::RenderError& e) {
+      videoFailed(output, e);
+    }
 
-  FramePipelineSettings pipeline;
-  pipeline.label = scene.name;
-  pipeline.frames = frameCount(scene.duration, 1.0 / scene.view.render.fps);
-  pipeline.fps = scene.view.render.fps;
-  pipeline.width = scene.view.render.width;
-  pipeline.height = scene.view.render.height;
-  pipeline.serial = env.serial;
-  const auto wallStart = Clock::now();
-  FramePipelineResult run;
-  try {
-    run = runFramePipeline(world, monitor, view, encoder, pipeline);
-  } catch (const EncodeError& e) {
-    videoFailed(output, e);
+    FramePipelineSettings pipeline;
+    pipeline.label = scene.name;
+    pipeline.frames = frameCount(scene.duration, 1.0 / scene.view.render.fps);
+    pipeline.fps = scene.view.render.fps;
+    pipeline.width = scene.view.render.width;
+    pipeline.height = scene.view.render.height;
+    pipeline.serial = env.serial;
+    const auto wallStart = Clock::now();
+    FramePipelineResult run;
+    try {
+      run = runFramePipeline(world, monitor, view, encoder, pipeline);
+    } catch (const EncodeError& e) {
+      videoFailed(output, e);
+    }
+    if (run.interrupted || interrupted()) {  // also a signal after the last frame was simulated
+      std::cerr << "springy render: interrupted by " << signalName(interruptSignal()) << "; " << output.target()
+                << " not written\n";
+      return interruptedExitStatus();
+    }
+    if (run.failure &&
+        retryDefaultStep(path, scene, *run.failure, untried, threadCount(options.overrides), std::cerr)) {
+      continue;  // drawn again, into the same temporary file, at the step that passed
+    }
+    if (run.failure) {
+      std::cerr << "springy render: " << path << ": " << run.failure->message << "\n"
+                << "springy render: stopped; " << output.target() << " not written (no video of an unstable run)\n";
+      return 1;
+    }
+    try {
+      encoder.finish();
+    } catch (const render::RenderError& e) {
+      videoFailed(output, e);
+    }
+    output.commit();
+    printSummary(path, outPath, scene, pipeline.frames, msSince(wallStart) / 1000.0, run, view.renderer().timings(),
+                 encoder, env);
+    return 0;
   }
-  if (run.interrupted || interrupted()) {  // also a signal after the last frame was simulated
-    std::cerr << "springy render: interrupted by " << signalName(interruptSignal()) << "; " << output.target()
-              << " not written\n";
-    return interruptedExitStatus();
-  }
-  if (run.failure) {
-    std::cerr << "springy render: " << path << ": " << run.failure->message << "\n"
-              << "springy render: stopped; " << output.target() << " not written (no video of an unstable run)\n";
-    return 1;
-  }
-  try {
-    encoder.finish();
-  } catch (const render::RenderError& e) {
-    videoFailed(output, e);
-  }
-  output.commit();
-  printSummary(path, outPath, scene, pipeline.frames, msSince(wallStart) / 1000.0, run, view.renderer().timings(),
-               encoder, env);
-  return 0;
 }
 
 // The times of --times, sorted. Each must be finite and within [0, duration]: a time past the end
@@ -287,19 +296,12 @@ int timeDecimals(const std::vector<double>& times) {
   return kMost;
 }
 
-int framesOne(const std::string& path, const FramesOptions& options) {
+// One run of framesOne: its exit status, or nothing when the run was the default step's try, it
+// failed, and retryDefaultStep found a step that passes (the stills are then drawn again, over
+// the same files).
+std::optional<int> framesRun(const std::string& path, const FramesOptions& options, SceneDesc& scene,
+                             const std::vector<double>& times, int decimals, const std::string& stem, bool& untried) {
   namespace fs = std::filesystem;
-  SceneDesc scene = loadSceneWith(path, options.overrides);
-  applyRenderOverrides(scene, options.render);
-  checkCamera(scene);
-  std::vector<double> times =
-      options.times.empty() ? std::vector<double>{} : parseTimes(options.times, scene.duration);
-  if (times.empty()) {
-    for (int i = 0; i < 8; ++i) times.push_back(scene.duration * i / 7.0);  // eight evenly spaced stills
-  }
-  const int decimals = timeDecimals(times);
-  makeDirectories(options.output, "-o");
-  const std::string stem = stemOf(path);
   World world = makeWorld(scene, options.overrides);
   Monitor monitor(world);
   SceneView view(scene, world, renderSettingsOf(scene));
@@ -329,6 +331,9 @@ int framesOne(const std::string& path, const FramesOptions& options) {
       if (interrupted()) return stopped(options.sheetOnly ? "the contact sheet" : file);
       const double next = std::min(t, world.time() + frame);
       if (std::optional<Failure> failure = advanceTo(world, monitor, next)) {
+        if (retryDefaultStep(path, scene, *failure, untried, threadCount(options.overrides), std::cerr)) {
+          return std::nullopt;
+        }
         std::cerr << "springy frames: " << path << ": " << failure->message << "\n";
         return 1;
       }
@@ -348,6 +353,25 @@ int framesOne(const std::string& path, const FramesOptions& options) {
     write(file, render::makeContactSheet(stills, labels, sheet));
   }
   return 0;
+}
+
+int framesOne(const std::string& path, const FramesOptions& options) {
+  bool untried = false;  // as render: the run is the default step's try
+  SceneDesc scene = loadSceneWith(path, options.overrides, true, &untried);
+  applyRenderOverrides(scene, options.render);
+  checkCamera(scene);
+  std::vector<double> times = options.times.empty() ? std::vector<double>{} : parseTimes(options.times, scene.duration);
+  if (times.empty()) {
+    for (int i = 0; i < 8; ++i) times.push_back(scene.duration * i / 7.0);  // eight evenly spaced stills
+  }
+  const int decimals = timeDecimals(times);
+  makeDirectories(options.output, "-o");
+  const std::string stem = stemOf(path);
+  for (;;) {  // again only after the default step's try failed and a longer step passed
+    if (const std::optional<int> status = framesRun(path, options, scene, times, decimals, stem, untried)) {
+      return *status;
+    }
+  }
 }
 
 }  // namespace

@@ -343,18 +343,23 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
   }
 }
 
-void retryDefaultStep(const std::string& path, SceneDesc& scene, const std::string& failure, unsigned threads,
-                      std::ostream& log) {
+bool retryDefaultStep(const std::string& path, SceneDesc& scene, const Failure& failure, bool& untried,
+                      unsigned threads, std::ostream& log) {
+  if (!untried || failure.criterion) return false;
+  untried = false;
+  char after[64];
+  std::snprintf(after, sizeof after, "after t = %.3g s", failure.time);
   const int failed = scene.substeps;
   if (failed >= kMaxSubsteps) {
-    throw Error(path + ": the default step: the run fails even at " + substepsText(failed) + ": " + failure);
+    throw Error(path + ": the default step: the run fails even at " + substepsText(failed) + ": " + after);
   }
-  log << "springy: " << path << ": the run failed at " << substepsText(failed) << " (" << failure << ")\n";
+  log << "springy: " << path << ": the run failed at " << substepsText(failed) << " (" << after << ")\n";
   scene.substeps = std::min(2 * failed, kMaxSubsteps);
   const std::string tried = tryTheSubsteps(path, scene, "the default step", threads, false, log);
   log << "springy: " << path << ": step " << seconds(stepSize(scene)) << " (dt " << seconds(scene.dt) << " / "
       << substepsText(scene.substeps) << "): the advisor's default step failed at " << substepsText(failed)
       << (tried.empty() ? "; the run passed at " + substepsText(scene.substeps) : tried) << "\n";
+  return true;
 }
 
 int runSuggest(const SuggestOptions& options) {

@@ -225,6 +225,55 @@ TEST_F(AppTest, FramesWritesStillsAndASheet) {
   EXPECT_EQ(filesIn(dir_), 3u);
 }
 
+// render and frames run a scene that gives no step once, as check does: the drawn run is the
+// advisor's try of its default step (before, a separate try simulated the whole scene first).
+TEST_F(AppTest, RenderRunsADefaultStepThatPassesOnce) {
+  const fs::path out = dir_ / "cloth.mp4";
+  const Result r = run("render " + data("cloth.toml") + " --width 96 --height 54 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("; this run is its try"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("over the whole run"), std::string::npos) << r.output;  // no separate try
+  EXPECT_EQ(filesIn(dir_), 1u);
+}
+
+// The coarse bunny's default step (3 substeps) fails at its landing, t = 1.63 s: render draws the
+// run again at the count that passed (6) into the same temporary file, and leaves only the whole
+// video; no failure is reported, since the user gave no step.
+TEST_F(AppTest, RenderDrawsAgainWhenTheDefaultStepsTryFails) {
+  const fs::path out = dir_ / "bunny.mp4";
+  const Result r = run("render " + data("bunny_coarse.toml") + " --width 96 --height 54 -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("; this run is its try"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the run failed at 3 substeps (after t = 1.6"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the run passed at 6 substeps"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(out.string() + ": 53 frames, "), std::string::npos) << r.output;  // 1.75 s at 30/s
+  EXPECT_GT(fs::file_size(out), 1000u);
+  EXPECT_EQ(filesIn(dir_), 1u);  // nothing left of the first run
+}
+
+// frames likewise: the stills of the failed try are drawn again from the run that passed, over the
+// same files; each is the one `--substeps 6` draws (t = 1.0 s, before the failure, too: a still
+// of the failed run would differ).
+TEST_F(AppTest, FramesDrawAgainWhenTheDefaultStepsTryFails) {
+  const std::string common = "frames " + data("bunny_coarse.toml") + " --width 96 --height 54 --times 1,1.75 -o ";
+  const fs::path given = dir_ / "given";
+  const Result r = run(common + dir_.string());
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("the run failed at 3 substeps (after t = 1.6"), std::string::npos) << r.output;
+  const Result six = run(common + given.string() + " --substeps 6");
+  ASSERT_EQ(six.status, 0) << six.output;
+  for (const char* still : {"bunny_coarse_t001.00.png", "bunny_coarse_t001.75.png"}) {
+    std::ifstream a(dir_ / still, std::ios::binary), b(given / still, std::ios::binary);
+    const std::string drawn((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
+    const std::string reference((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
+    EXPECT_FALSE(drawn.empty()) << still;
+    EXPECT_TRUE(drawn == reference) << still << " is not the still of the run at 6 substeps";
+  }
+  const Result three = run(common + (dir_ / "three").string() + " --substeps 3");
+  EXPECT_EQ(three.status, 1) << three.output;  // the step the user gives is not retried
+  EXPECT_NE(three.output.find("total energy rose"), std::string::npos) << three.output;
+}
+
 TEST_F(AppTest, BadTimesAreRejected) {
   const Result r = run("frames " + data("tiny.toml") + " -o " + dir_.string() + " --times 0,abc");
   EXPECT_EQ(r.status, 1);

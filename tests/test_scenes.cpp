@@ -32,8 +32,8 @@ struct SceneRun {
       : scene(advised(loadScene(scenePath(name)))),
         world(buildModel(scene), scene.integrator, stepSize(scene)),
         monitor(world) {}
-  // A scene that gives no step runs at the advisor's, as springy check and render run it (they try
-  // it over the whole run first, app/suggest.cpp tryTheSubsteps; on these scenes it passes at once).
+  // A scene that gives no step runs at the advisor's, as springy check and render run it (their run
+  // is its try, and more substeps are tried only if it fails; on these scenes it passes at once).
   static SceneDesc advised(SceneDesc scene) {
     if (!scene.stepGiven) adviseSubsteps(scene);
     return scene;

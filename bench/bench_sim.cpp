@@ -5,6 +5,7 @@
 // Counters: ns_per_strut / ns_per_hinge are per element per force evaluation; ns_per_vertex
 // is per vertex per step.
 #include <benchmark/benchmark.h>
+#include <immintrin.h>
 
 #include <atomic>
 #include <cmath>
@@ -109,6 +110,208 @@ void BM_StrutKernel(benchmark::State& state) {
   nsPer(state, "ns_per_strut", static_cast<double>(model.struts.size()));
 }
 BENCHMARK(BM_StrutKernel)->DenseRange(2, 6)->UseRealTime();
+
+// An experiment for issue 19 (not springy's kernel): the strut forces in single precision,
+// eight struts a packet in AVX2, with the positions and velocities stored as floats, one array
+// per coordinate (as a simulator whose state were floats would keep them), the ends gathered
+// (vgatherdps) and the forces added per strut end as springy's kernel adds them. What eight
+// lanes instead of four could give the strut kernel at best, against BM_StrutKernel.
+struct FloatStruts {
+  std::vector<int32_t> i, j;
+  std::vector<float> restLength, stiffness, damping;
+};
+
+FloatStruts floatStruts(const Model& model) {
+  FloatStruts s;
+  for (const Strut& st : model.struts) {
+    s.i.push_back(static_cast<int32_t>(st.i)), s.j.push_back(static_cast<int32_t>(st.j));
+    s.restLength.push_back(static_cast<float>(st.restLength)), s.stiffness.push_back(static_cast<float>(st.stiffness));
+    s.damping.push_back(static_cast<float>(st.damping));
+  }
+  return s;
+}
+
+// Struts [r, r + 8): their forces on their first ends from the end-to-end vectors d and the
+// velocity differences w (one lane a strut).
+__attribute__((target("avx2,fma"))) inline void packetForce(const FloatStruts& s, std::size_t r, const __m256 d[3],
+                                                            const __m256 w[3], __m256 force[3]) {
+  const __m256 ll = _mm256_fmadd_ps(d[2], d[2], _mm256_fmadd_ps(d[1], d[1], _mm256_mul_ps(d[0], d[0])));
+  const __m256 len = _mm256_sqrt_ps(ll);
+  const __m256 inv = _mm256_div_ps(_mm256_set1_ps(1.0f), len);
+  __m256 u[3];
+  for (int c = 0; c < 3; ++c) u[c] = _mm256_mul_ps(d[c], inv);
+  const __m256 rate = _mm256_fmadd_ps(w[2], u[2], _mm256_fmadd_ps(w[1], u[1], _mm256_mul_ps(w[0], u[0])));
+  const __m256 scale =
+      _mm256_fmadd_ps(_mm256_loadu_ps(&s.stiffness[r]), _mm256_sub_ps(len, _mm256_loadu_ps(&s.restLength[r])),
+                      _mm256_mul_ps(_mm256_loadu_ps(&s.damping[r]), rate));
+  for (int c = 0; c < 3; ++c) force[c] = _mm256_mul_ps(u[c], scale);
+}
+
+// The experiments' ball (level state.range(0)) in a perturbed state, its struts in floats; false
+// (the benchmark skipped) where the machine has no AVX2 and FMA.
+struct FloatCase {
+  Model model;
+  std::vector<Vec3> x, v;
+  FloatStruts struts;
+};
+bool floatCase(benchmark::State& state, FloatCase& c) {
+  if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma")) {
+    state.SkipWithError("needs AVX2 and FMA");
+    return false;
+  }
+  c.model = ballModel(static_cast<int>(state.range(0)), false);
+  perturbedState(c.model, c.x, c.v);
+  c.struts = floatStruts(c.model);
+  return true;
+}
+
+__attribute__((target("avx2,fma"))) void strutsFloat8(const FloatStruts& s, const float* const x[3],
+                                                      const float* const v[3], float* const f[3]) {
+  const std::size_t n = s.i.size();
+  alignas(32) float out[3][8];
+  std::size_t r = 0;
+  for (; r + 8 <= n; r += 8) {
+    const __m256i I = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&s.i[r]));
+    const __m256i J = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(&s.j[r]));
+    __m256 d[3], w[3];
+    for (int c = 0; c < 3; ++c) {
+      d[c] = _mm256_sub_ps(_mm256_i32gather_ps(x[c], J, 4), _mm256_i32gather_ps(x[c], I, 4));
+      w[c] = _mm256_sub_ps(_mm256_i32gather_ps(v[c], J, 4), _mm256_i32gather_ps(v[c], I, 4));
+    }
+    __m256 force[3];
+    packetForce(s, r, d, w, force);
+    for (int c = 0; c < 3; ++c) _mm256_store_ps(out[c], force[c]);
+    for (std::size_t l = 0; l < 8; ++l) {
+      const int32_t a = s.i[r + l], b = s.j[r + l];
+      for (int c = 0; c < 3; ++c) {
+        f[c][a] += out[c][l];
+        f[c][b] -= out[c][l];
+      }
+    }
+  }
+  for (; r < n; ++r) {
+    const int32_t a = s.i[r], b = s.j[r];
+    float dd[3], ww[3], l2 = 0.0f;
+    for (int c = 0; c < 3; ++c) {
+      dd[c] = x[c][b] - x[c][a], ww[c] = v[c][b] - v[c][a];
+      l2 += dd[c] * dd[c];
+    }
+    const float len = std::sqrt(l2), rate = (dd[0] * ww[0] + dd[1] * ww[1] + dd[2] * ww[2]) / len;
+    const float scale = (s.stiffness[r] * (len - s.restLength[r]) + s.damping[r] * rate) / len;
+    for (int c = 0; c < 3; ++c) {
+      f[c][a] += dd[c] * scale;
+      f[c][b] -= dd[c] * scale;
+    }
+  }
+}
+
+void BM_StrutKernelFloat8(benchmark::State& state) {
+  FloatCase fc;
+  if (!floatCase(state, fc)) return;
+  const Model& model = fc.model;
+  const std::vector<Vec3>&x = fc.x, &v = fc.v;
+  const FloatStruts& s = fc.struts;
+  const std::size_t n = x.size();
+  std::vector<float> xs[3], vs[3], fs[3];
+  for (int c = 0; c < 3; ++c) {
+    xs[c].resize(n), vs[c].resize(n), fs[c].assign(n, 0.0f);
+    for (std::size_t k = 0; k < n; ++k) xs[c][k] = static_cast<float>(x[k][c]), vs[c][k] = static_cast<float>(v[k][c]);
+  }
+  const float* const xp[3] = {xs[0].data(), xs[1].data(), xs[2].data()};
+  const float* const vp[3] = {vs[0].data(), vs[1].data(), vs[2].data()};
+  float* const fp[3] = {fs[0].data(), fs[1].data(), fs[2].data()};
+  for (auto _ : state) {
+    strutsFloat8(s, xp, vp, fp);
+    benchmark::DoNotOptimize(fp[0]);
+    benchmark::ClobberMemory();
+  }
+  nsPer(state, "ns_per_strut", static_cast<double>(model.struts.size()));
+}
+BENCHMARK(BM_StrutKernelFloat8)->DenseRange(2, 6)->UseRealTime();
+
+// The same with each vertex's position, velocity and force as four floats (x, y, z, unused): a
+// strut end is one 16-byte load, and its force one 16-byte add, instead of three of each.
+__attribute__((target("avx2,fma"))) void transpose8x4(const __m128 in[8], __m256 out[4]) {
+  __m256 r[4];
+  for (int k = 0; k < 4; ++k) r[k] = _mm256_set_m128(in[k + 4], in[k]);  // lanes k and k + 4
+  const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+  const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+  out[0] = _mm256_shuffle_ps(t0, t2, 0x44), out[1] = _mm256_shuffle_ps(t0, t2, 0xEE);
+  out[2] = _mm256_shuffle_ps(t1, t3, 0x44), out[3] = _mm256_shuffle_ps(t1, t3, 0xEE);
+}
+
+__attribute__((target("avx2,fma"))) void strutsFloat4x8(const FloatStruts& s, const float* x, const float* v,
+                                                        float* f) {
+  const std::size_t n = s.i.size();
+  std::size_t r = 0;
+  for (; r + 8 <= n; r += 8) {
+    __m128 a[8], b[8];
+    __m256 d[4], w[4], t[4];
+    for (int l = 0; l < 8; ++l) {
+      a[l] = _mm_sub_ps(_mm_loadu_ps(x + 4 * s.j[r + l]), _mm_loadu_ps(x + 4 * s.i[r + l]));
+      b[l] = _mm_sub_ps(_mm_loadu_ps(v + 4 * s.j[r + l]), _mm_loadu_ps(v + 4 * s.i[r + l]));
+    }
+    transpose8x4(a, d);
+    transpose8x4(b, w);
+    packetForce(s, r, d, w, t);
+    t[3] = _mm256_setzero_ps();
+    // Back to one (fx, fy, fz, 0) per strut: the same 8x4 transpose, read as 4x8.
+    const __m256 t0 = _mm256_unpacklo_ps(t[0], t[1]), t1 = _mm256_unpackhi_ps(t[0], t[1]);
+    const __m256 t2 = _mm256_unpacklo_ps(t[2], t[3]), t3 = _mm256_unpackhi_ps(t[2], t[3]);
+    const __m256 q[4] = {_mm256_shuffle_ps(t0, t2, 0x44), _mm256_shuffle_ps(t0, t2, 0xEE),
+                         _mm256_shuffle_ps(t1, t3, 0x44), _mm256_shuffle_ps(t1, t3, 0xEE)};
+    for (int l = 0; l < 8; ++l) {
+      const __m128 fl = l < 4 ? _mm256_castps256_ps128(q[l]) : _mm256_extractf128_ps(q[l - 4], 1);
+      float* fi = f + 4 * s.i[r + l];
+      float* fj = f + 4 * s.j[r + l];
+      _mm_storeu_ps(fi, _mm_add_ps(_mm_loadu_ps(fi), fl));
+      _mm_storeu_ps(fj, _mm_sub_ps(_mm_loadu_ps(fj), fl));
+    }
+  }
+}
+
+void BM_StrutKernelFloat4x8(benchmark::State& state) {
+  FloatCase fc;
+  if (!floatCase(state, fc)) return;
+  const Model& model = fc.model;
+  const std::vector<Vec3>&x = fc.x, &v = fc.v;
+  const FloatStruts& s = fc.struts;
+  std::vector<float> xs(4 * x.size(), 0.0f), vs(4 * x.size(), 0.0f), fs(4 * x.size(), 0.0f);
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    for (int c = 0; c < 3; ++c)
+      xs[4 * k + c] = static_cast<float>(x[k][c]), vs[4 * k + c] = static_cast<float>(v[k][c]);
+  }
+  // The price in accuracy, once: the largest difference from springy's kernel (doubles) over a
+  // vertex's force, relative to the largest strut force (the packets cover all but the last
+  // struts when their count is not a multiple of 8; those are left out of both).
+  {
+    const std::size_t whole = model.struts.size() / 8 * 8;
+    std::vector<Vec3> f(x.size());
+    applyStruts(model.struts.data(), Elements::range(0, whole), x.data(), v.data(), f.data());
+    strutsFloat4x8(s, xs.data(), vs.data(), fs.data());
+    double largest = 0.0, worst = 0.0;
+    for (std::size_t k = 0; k < whole; ++k) {
+      const Strut& st = model.struts[k];
+      const Vec3 d = x[st.j] - x[st.i];
+      const double l = length(d);
+      largest =
+          std::max(largest, std::fabs(st.stiffness * (l - st.restLength) + st.damping * dot(v[st.j] - v[st.i], d) / l));
+    }
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      const Vec3 single{fs[4 * k], fs[4 * k + 1], fs[4 * k + 2]};
+      worst = std::max(worst, length(single - f[k]));
+    }
+    state.counters["error_vs_double"] = worst / largest;
+    std::fill(fs.begin(), fs.end(), 0.0f);
+  }
+  for (auto _ : state) {
+    strutsFloat4x8(s, xs.data(), vs.data(), fs.data());
+    benchmark::DoNotOptimize(fs.data());
+    benchmark::ClobberMemory();
+  }
+  nsPer(state, "ns_per_strut", static_cast<double>(model.struts.size() / 8 * 8));
+}
+BENCHMARK(BM_StrutKernelFloat4x8)->DenseRange(2, 6)->UseRealTime();
 
 // The hinges of a ball, all in one call (four-lane packets) or one hinge per call (the
 // one-hinge kernel): the packets' gain, measured in the same run.
@@ -252,7 +455,7 @@ BENCHMARK(BM_StepThreads)->ArgsProduct({{2, 3, 4, 5, 6, 7}, {1, 2}})->UseRealTim
 // The time-to-solution ball of docs/bench-bullet.md (bench/drop_2562_gas.toml): 2562
 // vertices, struts P 15 ms, gas P_V 10 ms, no hinges, symplectic Euler at dt 1.5 ms, dropped
 // onto a plane; a cheap step, where fork-joins and traffic between the cores weigh most.
-void BM_GasBallStep(benchmark::State& state) {
+Model gasBallModel() {
   Model model;
   BodyDesc desc = ballDesc(4);
   desc.strutPeriod = 0.015;
@@ -260,6 +463,11 @@ void BM_GasBallStep(benchmark::State& state) {
   desc.volumePeriod = 0.01;
   addBody(model, desc);
   model.colliders.planes.push_back(PlaneCollider{{0, 0, 0}, {0, 1, 0}, 0.6, 0.3});
+  return model;
+}
+
+void BM_GasBallStep(benchmark::State& state) {
+  const Model model = gasBallModel();
   World world(model, Integrator::SymplecticEuler, 0.0015);
   world.setThreads(static_cast<unsigned>(state.range(0)), 0);
   for (auto _ : state) world.step();
@@ -271,13 +479,7 @@ BENCHMARK(BM_GasBallStep)->Arg(1)->Arg(2)->UseRealTime();
 // `springy check` takes once per output frame: at the bench scene's 120 frames/s, once every
 // 4.8 steps. Taken half-way through the fall and bounce (t = 0.6 s, just after the impact).
 void BM_GasBallMeasure(benchmark::State& state) {
-  Model model;
-  BodyDesc desc = ballDesc(4);
-  desc.strutPeriod = 0.015;
-  desc.hingePeriod = 0.0;
-  desc.volumePeriod = 0.01;
-  addBody(model, desc);
-  model.colliders.planes.push_back(PlaneCollider{{0, 0, 0}, {0, 1, 0}, 0.6, 0.3});
+  const Model model = gasBallModel();
   World world(model, Integrator::SymplecticEuler, 0.0015);
   world.setThreads(static_cast<unsigned>(state.range(0)), 0);
   while (world.time() < 0.6) world.step();

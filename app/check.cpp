@@ -36,6 +36,55 @@ void writeTraceRow(std::ostream& out, const std::string& scene, double t, const 
   out << csvField(scene) << time << csvField(body) << numbers;
 }
 
+// The run's first lines: the scene, its step and what it runs (force stages, contact, threads).
+void printRunHeader(const std::string& path, const SceneDesc& scene, const World& world) {
+  if (world.adaptive()) {
+    std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s (adaptive), tolerance %g, %g s\n", path.c_str(),
+                scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
+                std::string(integratorName(scene.integrator)).c_str(), scene.tolerance, scene.duration);
+  } else {
+    std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%s), %g s\n", path.c_str(),
+                scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
+                std::string(integratorName(scene.integrator)).c_str(), scene.dt, substepsText(scene.substeps).c_str(),
+                scene.duration);
+  }
+  std::printf("  stages: forces [");
+  for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
+    std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
+  }
+  std::printf("], collide: %s, contact between bodies: %s, threads: %u\n", world.collides() ? "yes" : "no",
+              world.bodyContacts() ? "yes" : "no", world.threads());
+  std::fflush(stdout);
+}
+
+// One run of a scene under the monitor, frame by frame at the render rate (the states a video
+// would show are the ones checked; at least one frame, as `render` draws one: a duration under
+// half a frame ran nothing and said ok). `rest` watches the last second's frames; `rows`, when
+// given, receives a trace row per frame and body. Returns the first failure; stops early, with
+// none, when a signal arrives (the caller asks interrupted()).
+std::optional<Failure> runFrames(const std::string& path, const SceneDesc& scene, World& world, Monitor& monitor,
+                                 RestWatch& rest, std::ostream* rows) {
+  const double frame = 1.0 / scene.view.render.fps;
+  const long frames = frameCount(scene.duration, frame);
+  const double watchFrom = scene.duration - RestWatch::kWindow;
+  // A long run shows that it is alive (stderr: a bar on a terminal, a line every 5 s in a log).
+  Progress progress(path, frames);
+  std::optional<Failure> failure;
+  for (long k = 1; k <= frames && !failure; ++k) {
+    if (interrupted()) return std::nullopt;
+    failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
+    progress.update(k, std::to_string(world.stepCount()) + " steps");
+    if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
+    if (rows) {
+      for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
+        writeTraceRow(*rows, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
+      }
+    }
+  }
+  progress.finish();
+  return failure;
+}
+
 }  // namespace
 
 int runCheck(const CheckOptions& options) {
@@ -86,50 +135,15 @@ int runCheck(const CheckOptions& options) {
       wallStart = std::chrono::steady_clock::now();
       World& world = worldSlot.emplace(makeWorld(scene, options.overrides));
       Monitor& monitor = monitorSlot.emplace(world, limits);
-      if (world.adaptive()) {
-        std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s (adaptive), tolerance %g, %g s\n", path.c_str(),
-                    scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
-                    std::string(integratorName(scene.integrator)).c_str(), scene.tolerance, scene.duration);
-      } else {
-        std::printf("%s: %s, %zu bodies, %zu vertices, integrator %s, dt %g s (%s), %g s\n", path.c_str(),
-                    scene.name.c_str(), scene.bodies.size(), world.model().vertexCount(),
-                    std::string(integratorName(scene.integrator)).c_str(), scene.dt,
-                    substepsText(scene.substeps).c_str(), scene.duration);
-      }
-      std::printf("  stages: forces [");
-      for (std::size_t i = 0; i < world.forceStages().size(); ++i) {
-        std::printf("%s%s", i ? " " : "", std::string(forceStageName(world.forceStages()[i])).c_str());
-      }
-      std::printf("], collide: %s, contact between bodies: %s, threads: %u\n", world.collides() ? "yes" : "no",
-                  world.bodyContacts() ? "yes" : "no", world.threads());
-      std::fflush(stdout);
-      // Sample at the render frame rate: the states a video would show are the ones checked. At
-      // least one frame, as `render` draws (a duration under half a frame ran nothing and said ok).
-      const double frame = 1.0 / scene.view.render.fps;
-      const long frames = frameCount(scene.duration, frame);
-      failure.reset();
-      // At rest at the end (RestWatch): the frames of the last second.
-      const double watchFrom = scene.duration - RestWatch::kWindow;
-      rest = RestWatch{};
+      printRunHeader(path, scene, world);
       tried.str("");
-      std::ostream& rows = untried ? static_cast<std::ostream&>(tried) : trace;
-      // A long run shows that it is alive (stderr: a bar on a terminal, a line every 5 s in a log).
-      Progress progress(path, frames);
-      for (long k = 1; k <= frames && !failure; ++k) {
-        if (interrupted()) {
-          std::cerr << "springy check: interrupted\n";
-          return interruptedExitStatus();
-        }
-        failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
-        progress.update(k, std::to_string(world.stepCount()) + " steps");
-        if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
-        if (trace.is_open()) {
-          for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
-            writeTraceRow(rows, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
-          }
-        }
+      std::ostream* rows = !trace.is_open() ? nullptr : untried ? static_cast<std::ostream*>(&tried) : &trace;
+      rest = RestWatch{};
+      failure = runFrames(path, scene, world, monitor, rest, rows);
+      if (interrupted()) {
+        std::cerr << "springy check: interrupted\n";
+        return interruptedExitStatus();
       }
-      progress.finish();
       if (!failure) break;
       try {
         if (!retryDefaultStep(path, scene, *failure, untried, threadCount(options.overrides), std::cerr)) break;

@@ -9,18 +9,20 @@
 #include <meshoptimizer.h>
 
 #include <algorithm>
-#include <cctype>
 #include <array>
 #include <assimp/Importer.hpp>
-#include <cmath>
+#include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
-#include <sstream>
+#include <new>
 #include <numeric>
+#include <sstream>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -282,20 +284,24 @@ void checkFaces(const aiScene& scene, const std::string& path) {
 
 namespace {
 
+// assimp catches what its importers throw and keeps the message; running out of memory is
+// thrown on as std::bad_alloc, for readInChild to say what limit the file ran into.
+[[noreturn]] void importFailed(const std::string& path, const Assimp::Importer& importer) {
+  const std::string why = importer.GetErrorString();
+  if (why == std::bad_alloc().what()) throw std::bad_alloc();
+  throw Error(path + ": cannot read mesh file: " + why);
+}
+
 // The reading itself, with assimp, in the calling process.
 TriMesh readWithAssimp(const std::string& path) {
   Assimp::Importer importer;
   // Validation, then (after our own checks) triangulation only: welding is done by
   // weldVertices, deterministically and with our tolerance.
   const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
-  if (scene == nullptr) {
-    throw Error(path + ": cannot read mesh file: " + importer.GetErrorString());
-  }
+  if (scene == nullptr) importFailed(path, importer);
   checkFaces(*scene, path);
   scene = importer.ApplyPostProcessing(aiProcess_Triangulate);
-  if (scene == nullptr) {
-    throw Error(path + ": cannot read mesh file: " + importer.GetErrorString());
-  }
+  if (scene == nullptr) importFailed(path, importer);
 
   TriMesh out;
   std::vector<bool> meshSeen(scene->mNumMeshes, false);
@@ -346,13 +352,58 @@ bool readAll(int fd, void* data, std::size_t size) {
   return true;
 }
 
-// The child's side: reads with assimp and sends the mesh (status 0) or the error (status 1).
-[[noreturn]] void readInChild(const std::string& path, int fd) {
-  ::alarm(kMeshReadSeconds);  // a hang ends as SIGALRM, which the parent reports
-#if !defined(__SANITIZE_ADDRESS__) && !defined(SPRINGY_FUZZING)
-  const rlimit memory{kMeshReadBytes, kMeshReadBytes};  // sanitizers reserve terabytes of address space
+// The child's exit status when it passed its memory limit in a sanitizer build (below).
+constexpr int kChildOutOfMemory = 4;
+
+std::string outOfMemoryText(const std::string& path, std::uint64_t limit, std::uintmax_t fileBytes) {
+  return path + ": cannot read mesh file: the reader (assimp) needed more than " + std::to_string(limit >> 20) +
+         " MiB for a file of " + std::to_string(fileBytes) +
+         " bytes (springy's limit for a file of that size: README, Limits): the file is corrupt, or too large to read";
+}
+
+#if defined(__SANITIZE_ADDRESS__) || defined(SPRINGY_FUZZING)
+}  // namespace
+// The sanitizer runtime's allocation hooks (declared in LLVM's sanitizer/allocator_interface.h,
+// which GCC does not install).
+extern "C" {
+std::size_t __sanitizer_get_allocated_size(const volatile void* p);
+int __sanitizer_install_malloc_and_free_hooks(void (*mallocHook)(const volatile void*, std::size_t),
+                                              void (*freeHook)(const volatile void*));
+}
+namespace {
+// A sanitizer reserves terabytes of address space, so no address-space limit fits its build: the
+// child counts its heap instead (bytes allocated since the fork less bytes freed) and ends with
+// kChildOutOfMemory past the limit. The child has one thread (fork copies only the caller).
+std::int64_t childHeap = 0, childHeapLimit = 0;
+void countAllocation(const volatile void*, std::size_t size) {
+  childHeap += static_cast<std::int64_t>(size);
+  if (childHeap > childHeapLimit) ::_exit(kChildOutOfMemory);
+}
+void countRelease(const volatile void* p) {
+  if (p != nullptr) childHeap -= static_cast<std::int64_t>(__sanitizer_get_allocated_size(p));
+}
+void limitChildMemory(std::uint64_t limit) {
+  childHeapLimit = static_cast<std::int64_t>(limit);
+  __sanitizer_install_malloc_and_free_hooks(countAllocation, countRelease);
+}
+#else
+// The address space the child has from its parent (program, libraries, heap) and `limit` more.
+void limitChildMemory(std::uint64_t limit) {
+  unsigned long long pages = 0;
+  if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%llu", &pages) != 1) pages = 0;
+    std::fclose(f);
+  }
+  const rlim_t bytes = static_cast<rlim_t>(pages * static_cast<unsigned long long>(::sysconf(_SC_PAGESIZE)) + limit);
+  const rlimit memory{bytes, bytes};
   ::setrlimit(RLIMIT_AS, &memory);
+}
 #endif
+
+// The child's side: reads with assimp and sends the mesh (status 0) or the error (status 1).
+[[noreturn]] void readInChild(const std::string& path, std::uintmax_t fileBytes, int fd) {
+  ::alarm(kMeshReadSeconds);  // a hang ends as SIGALRM, which the parent reports
+  limitChildMemory(meshReadBytes(fileBytes));
   bool ok = true;
   try {
     const TriMesh mesh = readWithAssimp(path);
@@ -363,7 +414,10 @@ bool readAll(int fd, void* data, std::size_t size) {
          writeAll(fd, mesh.triangles.data(), mesh.triangles.size() * sizeof(Triangle));
   } catch (const std::exception& e) {
     const uint8_t status = 1;
-    const std::string message = dynamic_cast<const Error*>(&e) ? e.what() : path + ": cannot read mesh file: " + e.what();
+    const std::string message = dynamic_cast<const Error*>(&e) ? e.what()
+                                : dynamic_cast<const std::bad_alloc*>(&e)
+                                    ? outOfMemoryText(path, meshReadBytes(fileBytes), fileBytes)
+                                    : path + ": cannot read mesh file: " + e.what();
     const uint64_t size = message.size();
     ok = writeAll(fd, &status, 1) && writeAll(fd, &size, sizeof size) && writeAll(fd, message.data(), message.size());
   }
@@ -389,7 +443,7 @@ TriMesh readMeshFile(const std::string& path) {
   }
   if (child == 0) {
     ::close(fds[0]);
-    readInChild(path, fds[1]);
+    readInChild(path, fileSize, fds[1]);
   }
   ::close(fds[1]);
   uint8_t status = 2;
@@ -418,6 +472,9 @@ TriMesh readMeshFile(const std::string& path) {
   }
   if (status == 1) throw Error(message);
   if (status == 0 && WIFEXITED(wait) && WEXITSTATUS(wait) == 0) return out;
+  if (WIFEXITED(wait) && WEXITSTATUS(wait) == kChildOutOfMemory) {
+    throw Error(outOfMemoryText(path, meshReadBytes(fileSize), fileSize));
+  }
   if (WIFSIGNALED(wait) && WTERMSIG(wait) == SIGALRM) {
     throw Error(path + ": cannot read mesh file: reading took longer than " + std::to_string(kMeshReadSeconds) +
                 " s (the file is corrupt, or too large)");

@@ -130,6 +130,22 @@ TEST_F(BadInput, APlyHeaderWithoutItsEndIsAnErrorNotAHang) {
   EXPECT_HAS(errorOf([&] { readMeshFile(path); }), "'element vertex many' is not 'element NAME COUNT'");
 }
 
+// Found by the fuzzer (CI's 30-second run, 2026-12-05): a 1 KiB COLLADA file whose index list
+// holds a stray byte makes assimp's reader allocate without end (3 GiB in 7 s, until the child's
+// fixed 8 GiB stopped it with "std::bad_alloc"). The child's memory now follows the file's size
+// (meshReadBytes: 512 MiB for a small file), and the message says which limit the file ran into
+// (fuzz/regressions/mesh/dae_triangle_list_with_a_stray_byte.dae).
+TEST_F(BadInput, AFileThatFloodsTheReaderIsRefusedAtTheLimitForItsSize) {
+  const std::string path =
+      std::string(SPRINGY_SOURCE_DIR) + "/fuzz/regressions/mesh/dae_triangle_list_with_a_stray_byte.dae";
+  const std::string message = errorOf([&] { readMeshFile(path); });
+  EXPECT_HAS(message,
+             "dae_triangle_list_with_a_stray_byte.dae: cannot read mesh file: the reader (assimp) needed "
+             "more than 512 MiB for a file of 1088 bytes");
+  EXPECT_EQ(meshReadBytes(1088), (512ull << 20) + 32 * 1088);
+  EXPECT_EQ(meshReadBytes(kMaxMeshFileBytes), 8ull << 30);  // the largest file: at most 8 GiB
+}
+
 // Reproduction 2: a 200-byte file whose header claims 2e9 vertices took all memory.
 TEST_F(BadInput, APlyHeaderClaimingMoreThanTheFileHoldsIsRefusedBeforeReading) {
   const std::string huge = write("huge.ply",

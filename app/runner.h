@@ -34,8 +34,9 @@ SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::strin
 // Loads a scene and applies the overrides. Throws springy::Error. advise: run the stability
 // advisor (warn on stderr when the step exceeds its estimate; pick --substeps auto) and print the
 // bodies' notes; without it nothing is printed (a sweep validating its points).
-// With `runIsTry` (check), a default step is not tried first (adviseTimeStep); *runIsTry then
-// says whether the step is such an untried default, for the caller to run as its try.
+// With `runIsTry` (check, render, frames), a default step is not tried first (adviseTimeStep);
+// *runIsTry then says whether the step is such an untried default, for the caller to run as its
+// try (and, if that run fails, to call retryDefaultStep).
 SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise = true,
                         bool* runIsTry = nullptr);
 

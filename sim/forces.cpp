@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "sim/lanes.h"
+
 namespace springy {
 namespace {
 
@@ -49,14 +51,51 @@ void applyWindPressure(const Model& model, Elements faces, const Vec3& air, cons
 
 namespace {
 
-// Six times the volume of faces [begin, end) about o; with kStore, also each face's N. The
-// indices and positions are read into locals first: storing N through a pointer GCC cannot
-// tell apart from x otherwise makes it keep them in memory, where the reloads stall.
+using lanes::Lanes;
+using lanes::loadPair;
+using lanes::Pair;
+
+// Six times the volume of faces [begin, end) about o; with kStore, also each face's N. Four
+// faces at a time, one per lane (sim/lanes.h), each lane summing its own faces; the lanes' sums
+// are added in lane order at the end and the faces left over one by one, so the result depends
+// only on [begin, end). A vertex's x and y load as one pair. (One face at a time, GCC kept the
+// face's N in memory between its store and the dot product, and the loop waited on that round
+// trip; one sum in face order, the loop waited on its additions.)
 template <bool kStore>
-double sixVolumeOf(const Triangle* faces, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x,
-                   Vec3* areaVectors) {
-  double sum = 0.0;
-  for (uint32_t f = begin; f < end; ++f) {
+__attribute__((always_inline)) inline double sixVolumeOf(const Triangle* faces, uint32_t begin, uint32_t end,
+                                                         const Vec3& o, const Vec3* x, Vec3* areaVectors) {
+  Lanes sums = {0.0, 0.0, 0.0, 0.0};
+  uint32_t f = begin;
+  for (; f + 4 <= end; f += 4) {
+    Pair p0[4], p1[4], p2[4];
+    double z0[4], z1[4], z2[4];
+    for (int r = 0; r < 4; ++r) {
+      const Triangle& t = faces[f + static_cast<uint32_t>(r)];
+      p0[r] = loadPair(&x[t[0]].x), p1[r] = loadPair(&x[t[1]].x), p2[r] = loadPair(&x[t[2]].x);
+      z0[r] = x[t[0]].z, z1[r] = x[t[1]].z, z2[r] = x[t[2]].z;
+    }
+    Lanes x0, y0, x1, y1, x2, y2;
+    lanes::transpose(p0[0], p0[1], p0[2], p0[3], x0, y0);
+    lanes::transpose(p1[0], p1[1], p1[2], p1[3], x1, y1);
+    lanes::transpose(p2[0], p2[1], p2[2], p2[3], x2, y2);
+    const Lanes zl0 = {z0[0], z0[2], z0[1], z0[3]}, zl1 = {z1[0], z1[2], z1[1], z1[3]},
+                zl2 = {z2[0], z2[2], z2[1], z2[3]};
+    const Lanes e1x = x1 - x0, e1y = y1 - y0, e1z = zl1 - zl0, e2x = x2 - x0, e2y = y2 - y0, e2z = zl2 - zl0;
+    const Lanes nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+    const Lanes d = (x0 - o.x) * nx + (y0 - o.y) * ny + (zl0 - o.z) * nz;
+    sums += d;
+    if constexpr (kStore) {
+      Pair nxy[4];
+      lanes::untranspose(nx, ny, nxy);
+      for (int r = 0; r < 4; ++r) {
+        Vec3& n = areaVectors[f + static_cast<uint32_t>(r)];
+        lanes::storePair(&n.x, nxy[r]);
+        n.z = nz[lanes::kLaneOf[r]];
+      }
+    }
+  }
+  double sum = ((sums[0] + sums[1]) + sums[2]) + sums[3];
+  for (; f < end; ++f) {
     const uint32_t i0 = faces[f][0], i1 = faces[f][1], i2 = faces[f][2];
     const Vec3 x0 = x[i0], e1 = x[i1] - x0, e2 = x[i2] - x0;
     const Vec3 n = cross(e1, e2);
@@ -68,8 +107,8 @@ double sixVolumeOf(const Triangle* faces, uint32_t begin, uint32_t end, const Ve
 
 }  // namespace
 
-double sixVolume(const Model& model, uint32_t begin, uint32_t end, const Vec3& o, const Vec3* x,
-                 Vec3* areaVectors) {
+__attribute__((target_clones("avx2", "default"))) double sixVolume(const Model& model, uint32_t begin, uint32_t end,
+                                                                   const Vec3& o, const Vec3* x, Vec3* areaVectors) {
   return areaVectors ? sixVolumeOf<true>(model.faces.data(), begin, end, o, x, areaVectors)
                      : sixVolumeOf<false>(model.faces.data(), begin, end, o, x, nullptr);
 }

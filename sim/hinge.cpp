@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "sim/lanes.h"
+
 // The vector helpers below (hingePacket) return 32-byte vectors; they are local to this file
 // and inlined, so GCC's warning that such calls have another ABI with and without AVX concerns
 // no caller.
@@ -173,12 +175,11 @@ inline bool hingeForces(const Hinge& hg, const HingeTerms& terms, const Vec3* x,
   return true;
 }
 
-// Four hinges at once, one per lane of a vector of four doubles (GCC's vector extension: one
-// AVX register where the CPU has AVX2, chosen at run time, else two SSE2 halves). Each lane
+// Four hinges at once, one per lane of a vector of four doubles (sim/lanes.h). Each lane
 // performs hingeForces' operations in the same order, and the build never fuses a multiply
 // and an add (-ffp-contract=off), so a hinge's forces are bit-identical whichever packet, lane,
 // instruction set or thread computes them (tests/test_forces.cpp checks against hingeForces).
-typedef double Lanes __attribute__((vector_size(32)));
+using lanes::Lanes;
 
 struct V3L {
   Lanes x, y, z;

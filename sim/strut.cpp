@@ -5,6 +5,8 @@
 #include <cstddef>
 #include <cstring>
 
+#include "sim/lanes.h"
+
 // strutPacket returns 32-byte vectors through inlined helpers local to this file; GCC's note
 // that such calls have another ABI with and without AVX concerns no caller.
 #pragma GCC diagnostic ignored "-Wpsabi"
@@ -31,25 +33,13 @@ inline bool strutForce(const Strut& st, const Vec3* x, const Vec3* v, Vec3& fi) 
 // the square root and the division, which the scalar kernel waits on one strut at a time, and
 // fewer loads: a vertex's x and y move as one 16-byte pair, and so do a strut's rest length
 // and stiffness (a strut reads 16 values and writes 6; one load at a time it was 23 and 6).
-typedef double Lanes __attribute__((vector_size(32)));
-typedef double Pair __attribute__((vector_size(16)));
+using lanes::Lanes;
+using lanes::loadPair;
+using lanes::Pair;
+using lanes::transpose;
 static_assert(offsetof(Vec3, y) == offsetof(Vec3, x) + sizeof(double), "a Vec3's x and y load as one pair");
 static_assert(offsetof(Strut, stiffness) == offsetof(Strut, restLength) + sizeof(double),
               "a strut's rest length and stiffness load as one pair");
-
-inline Pair loadPair(const double* p) {
-  Pair r;
-  std::memcpy(&r, p, sizeof r);
-  return r;
-}
-
-// Lanes hold the struts in the order 0, 2, 1, 3: the order in which the in-lane unpacks below
-// turn four (x, y) pairs into an x vector and a y vector, and back.
-inline void transpose(Pair p0, Pair p1, Pair p2, Pair p3, Lanes& first, Lanes& second) {
-  const Lanes lo = __builtin_shufflevector(p0, p1, 0, 1, 2, 3), hi = __builtin_shufflevector(p2, p3, 0, 1, 2, 3);
-  first = __builtin_shufflevector(lo, hi, 0, 4, 2, 6);
-  second = __builtin_shufflevector(lo, hi, 1, 5, 3, 7);
-}
 
 struct PacketForce {
   Pair xy[4];     // strut r's (fx, fy)
@@ -85,24 +75,18 @@ __attribute__((always_inline)) inline void strutPacket(const Strut* const s[4], 
   const Lanes fx = ux * scale, fy = uy * scale, fz = uz * scale;
   // Back to struts: unpacking (fx, fy) gives the pairs of lanes 0 and 2 (struts 0 and 1), and of
   // lanes 1 and 3 (struts 2 and 3).
-  const Lanes even = __builtin_shufflevector(fx, fy, 0, 4, 2, 6), odd = __builtin_shufflevector(fx, fy, 1, 5, 3, 7);
-  out.xy[0] = __builtin_shufflevector(even, even, 0, 1);
-  out.xy[1] = __builtin_shufflevector(even, even, 2, 3);
-  out.xy[2] = __builtin_shufflevector(odd, odd, 0, 1);
-  out.xy[3] = __builtin_shufflevector(odd, odd, 2, 3);
+  lanes::untranspose(fx, fy, out.xy);
   out.z[0] = fz[0], out.z[1] = fz[2], out.z[2] = fz[1], out.z[3] = fz[3];
   out.ok = (len[0] > 0.0 ? 1u : 0u) | (len[2] > 0.0 ? 2u : 0u) | (len[1] > 0.0 ? 4u : 0u) | (len[3] > 0.0 ? 8u : 0u);
 }
 
 // f[i] += (xy, z) or -= it, the pair as one 16-byte operation (the same sums as per component).
 inline void addTo(Vec3& f, Pair xy, double z) {
-  Pair sum = loadPair(&f.x) + xy;
-  std::memcpy(&f.x, &sum, sizeof sum);
+  lanes::storePair(&f.x, loadPair(&f.x) + xy);
   f.z += z;
 }
 inline void subtractFrom(Vec3& f, Pair xy, double z) {
-  Pair difference = loadPair(&f.x) - xy;
-  std::memcpy(&f.x, &difference, sizeof difference);
+  lanes::storePair(&f.x, loadPair(&f.x) - xy);
   f.z -= z;
 }
 

@@ -88,6 +88,39 @@ TEST(Gas, ForceIsMinusTheGradientOfItsEnergy) {
   EXPECT_LT(length(torque), 1e-12 * scale * static_cast<double>(x.size()));
 }
 
+// sixVolume takes four faces at a time (sim/lanes.h) and the rest one by one: over every range
+// length and start, each face's N is bit-identical to the cross product of its edges, and the
+// sum matches the face-by-face sum to round-off.
+TEST(Gas, SixVolumeOfAnyFaceRangeIsTheSumOfItsFaces) {
+  const Model model = gasBall(1, 0.05, 0.0, 0.0);
+  std::vector<Vec3> x = model.restPosition;
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = x[i] * 0.9 + perturb(static_cast<int>(i)) * 0.05;
+  const Vec3 o = x[3];
+  const uint32_t faces = static_cast<uint32_t>(model.faces.size());
+  for (uint32_t begin : {0u, 1u, 2u, 3u, 5u, 17u}) {
+    for (uint32_t count = 0; count <= 13 && begin + count <= faces; ++count) {
+      std::vector<Vec3> n(faces, Vec3{-1, -1, -1});
+      const double six = sixVolume(model, begin, begin + count, o, x.data(), n.data());
+      double expected = 0.0, magnitude = 0.0;
+      for (uint32_t f = begin; f < begin + count; ++f) {
+        const Triangle& t = model.faces[f];
+        const Vec3 cr = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]);
+        EXPECT_EQ(n[f], cr) << "face " << f << " of [" << begin << ", " << begin + count << ")";
+        expected += dot(x[t[0]] - o, cr);
+        magnitude += std::fabs(dot(x[t[0]] - o, cr));
+      }
+      EXPECT_NEAR(six, expected, 1e-15 * magnitude) << "[" << begin << ", " << begin + count << ")";
+      EXPECT_EQ(sixVolume(model, begin, begin + count, o, x.data(), nullptr), six);  // the same sum without N
+      if (begin > 0) {
+        EXPECT_EQ(n[begin - 1], (Vec3{-1, -1, -1}));  // nothing written outside the range
+      }
+      if (begin + count < faces) {
+        EXPECT_EQ(n[begin + count], (Vec3{-1, -1, -1}));
+      }
+    }
+  }
+}
+
 TEST(Gas, VolumeIsExactAndIndependentOfWhereTheBodyIs) {
   // A cube of side 2: 8 m^3, wherever it is.
   Model model;

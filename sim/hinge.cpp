@@ -198,25 +198,35 @@ inline Lanes sqrt(const Lanes& a) {
   return r;
 }
 
-// The forces of hinges hs[0..3] into out[lane][corner]; ok[lane] is hingeForces' result.
-__attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* const hs[4],
-                                                                   const HingeTerms* const ts[4], const Vec3* x,
-                                                                   const Vec3* v, Vec3 out[4][4], bool ok[4]) {
+// Four vertices' positions (or velocities) v[index[r]], r = 0..3, into lanes in transpose's order
+// (sim/lanes.h): x and y as one 16-byte pair a vertex.
+inline V3L loadLanes(const Vec3* v, const uint32_t index[4]) {
+  V3L out;
+  lanes::transpose(lanes::loadPair(&v[index[0]].x), lanes::loadPair(&v[index[1]].x), lanes::loadPair(&v[index[2]].x),
+                   lanes::loadPair(&v[index[3]].x), out.x, out.y);
+  out.z = Lanes{v[index[0]].z, v[index[2]].z, v[index[1]].z, v[index[3]].z};
+  return out;
+}
+
+// The forces of hinges hs[0..3] into out[r][corner]; ok[r] is hingeForces' result. Inlined into
+// applyHinges' clones (a call per packet to a clone of its own measured slower: the packet's
+// forces went through memory to the adding loop, compiled for the baseline target).
+__attribute__((always_inline)) inline void hingePacket(const Hinge* const hs[4], const HingeTerms* const ts[4],
+                                                       const Vec3* x, const Vec3* v, Vec3 out[4][4], bool ok[4]) {
+  using lanes::kLaneOf;
   V3L p[4], w[4];
-  Lanes restCos, restSin, minLeverSquared[2], stiffness, damping;
-  for (int l = 0; l < 4; ++l) {
-    const Hinge& hg = *hs[l];
-    const HingeTerms& t = *ts[l];
-    for (int i = 0; i < 4; ++i) {
-      const Vec3& a = x[hg.v[i]];
-      const Vec3& b = v[hg.v[i]];
-      p[i].x[l] = a.x, p[i].y[l] = a.y, p[i].z[l] = a.z;
-      w[i].x[l] = b.x, w[i].y[l] = b.y, w[i].z[l] = b.z;
-    }
-    restCos[l] = t.restCos, restSin[l] = t.restSin;
-    for (int s = 0; s < 2; ++s) minLeverSquared[s][l] = t.minLeverSquared[s];
-    stiffness[l] = hg.stiffness, damping[l] = hg.damping;
+  for (int i = 0; i < 4; ++i) {
+    const uint32_t index[4] = {hs[0]->v[i], hs[1]->v[i], hs[2]->v[i], hs[3]->v[i]};
+    p[i] = loadLanes(x, index);
+    w[i] = loadLanes(v, index);
   }
+  const auto perHinge = [&](auto value) { return Lanes{value(0), value(2), value(1), value(3)}; };  // lane order
+  const Lanes restCos = perHinge([&](int r) { return ts[r]->restCos; });
+  const Lanes restSin = perHinge([&](int r) { return ts[r]->restSin; });
+  const Lanes minLeverSquared[2] = {perHinge([&](int r) { return ts[r]->minLeverSquared[0]; }),
+                                    perHinge([&](int r) { return ts[r]->minLeverSquared[1]; })};
+  const Lanes stiffness = perHinge([&](int r) { return hs[r]->stiffness; });
+  const Lanes damping = perHinge([&](int r) { return hs[r]->damping; });
   const V3L e = p[1] - p[0], x02 = p[2] - p[0], x03 = p[3] - p[0];
   const Lanes ee = dot(e, e);
   const V3L nl = cross(e, x02), nr = cross(x03, e);
@@ -239,26 +249,29 @@ __attribute__((target_clones("avx2", "default"))) void hingePacket(const Hinge* 
   const Lanes rate = dot(g0, w[0]) + dot(g1, w[1]) + dot(g2, w[2]) + dot(g3, w[3]);
   const Lanes scale = -(stiffness * delta + damping * rate);
   const V3L g[4] = {g0, g1, g2, g3};
-  for (int l = 0; l < 4; ++l) {
-    ok[l] = valid[l] != 0;
-    if (ok[l] && crushed[l]) {  // rare: a crushed face's hinge fades out (fadedForces)
-      ok[l] = hingeForces(*hs[l], *ts[l], x, v, out[l]);
-      continue;
+  for (int i = 0; i < 4; ++i) {
+    const V3L fi = g[i] * scale;
+    lanes::Pair xy[4];
+    lanes::untranspose(fi.x, fi.y, xy);
+    for (int r = 0; r < 4; ++r) {
+      lanes::storePair(&out[r][i].x, xy[r]);
+      out[r][i].z = fi.z[kLaneOf[r]];
     }
-    for (int i = 0; i < 4; ++i) out[l][i] = Vec3{g[i].x[l] * scale[l], g[i].y[l] * scale[l], g[i].z[l] * scale[l]};
+  }
+  for (int r = 0; r < 4; ++r) {
+    const int l = kLaneOf[r];
+    ok[r] = valid[l] != 0;
+    if (ok[r] && crushed[l]) ok[r] = hingeForces(*hs[r], *ts[r], x, v, out[r]);  // rare: fadedForces
   }
 }
 
-}  // namespace
-
-namespace {
-
 // Adds the forces of count hinges, the r-th being hinges[indexOf(r)], to the corners whose bit
 // is set in maskOf(r): four at a time through hingePacket, the rest one at a time, always
-// summed in list order.
+// summed in list order. Always inlined into applyHinges' clones, as applyStrutList (strut.cpp).
 template <class IndexOf, class MaskOf>
-void applyHingeList(const Hinge* hinges, const HingeTerms* terms, std::size_t count, IndexOf indexOf, MaskOf maskOf,
-                    const Vec3* x, const Vec3* v, Vec3* f) {
+__attribute__((always_inline)) inline void applyHingeList(const Hinge* hinges, const HingeTerms* terms,
+                                                          std::size_t count, IndexOf indexOf, MaskOf maskOf,
+                                                          const Vec3* x, const Vec3* v, Vec3* f) {
   Vec3 out[4][4];
   bool ok[4];
   const auto add = [&](std::size_t r, const Vec3 forces[4]) {
@@ -285,11 +298,16 @@ void applyHingeList(const Hinge* hinges, const HingeTerms* terms, std::size_t co
 
 }  // namespace
 
-void applyHinges(const Hinge* hinges, const HingeTerms* terms, Elements elements, const Vec3* x, const Vec3* v,
-                 Vec3* f) {
-  elements.visit([&](std::size_t count, auto indexOf, auto maskOf) {
-    applyHingeList(hinges, terms, count, indexOf, maskOf, x, v, f);
-  });
+// Both loops (range and list) spelt out, as applyStruts (strut.cpp) does and for its reason.
+__attribute__((target_clones("avx2", "default"))) void applyHinges(const Hinge* hinges, const HingeTerms* terms,
+                                                                   Elements elements, const Vec3* x, const Vec3* v,
+                                                                   Vec3* f) {
+  if (const ElementRef* list = elements.list()) {
+    applyHingeList(hinges, terms, elements.count(), Elements::ListIndex{list}, Elements::ListMask{list}, x, v, f);
+  } else {
+    applyHingeList(hinges, terms, elements.count(), Elements::RangeIndex{elements.first()}, Elements::AllVertices{}, x,
+                   v, f);
+  }
 }
 
 double hingeEnergy(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x) {

@@ -9,6 +9,10 @@
 namespace springy {
 namespace {
 
+using lanes::Lanes;
+using lanes::loadPair;
+using lanes::Pair;
+
 // The wind's force on each corner of face t; false for a leeward or degenerate face. A face of
 // an open surface (a cloth) has no leeward side: the wind meets whichever side faces it, and
 // c A ((w - v) . n) n is the same for n and -n.
@@ -34,26 +38,82 @@ void applyDrag(const Model& model, std::size_t begin, std::size_t end, const Vec
   for (std::size_t i = begin; i < end; ++i) f[i] -= (v[i] - air) * (model.drag * model.mass[i]);
 }
 
-void applyWindPressure(const Model& model, Elements faces, const Vec3& air, const Vec3* x, const Vec3* v, Vec3* f) {
+namespace {
+
+// windForce for four faces at once, one per lane (sim/lanes.h): the same operations in the same
+// order, so each face's force is bit-identical to windForce's. Bit r of the result: face r is
+// pushed (windForce returned true), its corners' force in force[r].
+__attribute__((always_inline)) inline unsigned windPacket(const Triangle* const ts[4], const bool twoSided[4], double c,
+                                                          const Vec3& air, const Vec3* x, const Vec3* v,
+                                                          Vec3 force[4]) {
+  using lanes::V3L;
+  V3L p[3], w[3];
+  for (int i = 0; i < 3; ++i) {
+    const uint32_t index[4] = {(*ts[0])[i], (*ts[1])[i], (*ts[2])[i], (*ts[3])[i]};
+    p[i] = lanes::gather(x, index);
+    w[i] = lanes::gather(v, index);
+  }
+  const V3L areaNormal = cross(p[1] - p[0], p[2] - p[0]) * Lanes{0.5, 0.5, 0.5, 0.5};
+  const V3L velocity = w[0] + w[1] + w[2];
+  const V3L relative = {air.x - velocity.x / 3.0, air.y - velocity.y / 3.0, air.z - velocity.z / 3.0};
+  const Lanes flux = dot(relative, areaNormal);
+  const Lanes area = lanes::sqrt(dot(areaNormal, areaNormal));
+  lanes::scatter(areaNormal * (c * flux / area / 3.0), force);
+  unsigned pushed = 0;
+  for (int r = 0; r < 4; ++r) {
+    const int l = lanes::kLaneOf[r];
+    const bool leeward = twoSided[r] ? flux[l] == 0.0 : flux[l] >= 0.0;
+    if (!leeward && area[l] > 0.0) pushed |= 1u << r;
+  }
+  return pushed;
+}
+
+// Four faces a packet, the rest one at a time, each face's force added to its corners in list
+// order. Always inlined into applyWindPressure's clones (as applyStrutList, strut.cpp).
+template <class IndexOf, class MaskOf>
+__attribute__((always_inline)) inline void applyWindList(const Model& model, std::size_t count, IndexOf indexOf,
+                                                         MaskOf maskOf, const Vec3& air, const Vec3* x, const Vec3* v,
+                                                         Vec3* f) {
   const double c = model.wind->pressure;
-  faces.visit([&](std::size_t count, auto indexOf, auto maskOf) {
-    Vec3 force;
-    for (std::size_t r = 0; r < count; ++r) {
-      const Triangle& t = model.faces[indexOf(r)];
-      if (!windForce(t, c, air, x, v, model.bodies[model.body[t[0]]].open, force)) continue;
-      const uint32_t mask = maskOf(r);
-      for (int i = 0; i < 3; ++i) {
-        if (mask & (1u << i)) f[t[i]] += force;
-      }
+  const auto add = [&](std::size_t r, const Vec3& force) {
+    const Triangle& t = model.faces[indexOf(r)];
+    const uint32_t mask = maskOf(r);
+    for (int i = 0; i < 3; ++i) {
+      if (mask & (1u << i)) f[t[i]] += force;
     }
-  });
+  };
+  const auto open = [&](const Triangle& t) { return model.bodies[model.body[t[0]]].open; };
+  Vec3 force[4];
+  std::size_t r = 0;
+  for (; r + 4 <= count; r += 4) {
+    const Triangle* ts[4];
+    bool twoSided[4];
+    for (std::size_t k = 0; k < 4; ++k) ts[k] = &model.faces[indexOf(r + k)], twoSided[k] = open(*ts[k]);
+    const unsigned pushed = windPacket(ts, twoSided, c, air, x, v, force);
+    for (std::size_t k = 0; k < 4; ++k) {
+      if (pushed & (1u << k)) add(r + k, force[k]);
+    }
+  }
+  for (; r < count; ++r) {
+    const Triangle& t = model.faces[indexOf(r)];
+    if (windForce(t, c, air, x, v, open(t), force[0])) add(r, force[0]);
+  }
+}
+
+}  // namespace
+
+// Both loops (range and list) spelt out, as applyStruts (strut.cpp) does and for its reason.
+__attribute__((target_clones("avx2", "default"))) void applyWindPressure(const Model& model, Elements faces,
+                                                                         const Vec3& air, const Vec3* x, const Vec3* v,
+                                                                         Vec3* f) {
+  if (const ElementRef* list = faces.list()) {
+    applyWindList(model, faces.count(), Elements::ListIndex{list}, Elements::ListMask{list}, air, x, v, f);
+  } else {
+    applyWindList(model, faces.count(), Elements::RangeIndex{faces.first()}, Elements::AllVertices{}, air, x, v, f);
+  }
 }
 
 namespace {
-
-using lanes::Lanes;
-using lanes::loadPair;
-using lanes::Pair;
 
 // Six times the volume of faces [begin, end) about o; with kStore, also each face's N. Four
 // faces at a time, one per lane (sim/lanes.h), each lane summing its own faces; the lanes' sums

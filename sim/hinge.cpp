@@ -6,11 +6,6 @@
 
 #include "sim/lanes.h"
 
-// The vector helpers below (hingePacket) return 32-byte vectors; they are local to this file
-// and inlined, so GCC's warning that such calls have another ABI with and without AVX concerns
-// no caller.
-#pragma GCC diagnostic ignored "-Wpsabi"
-
 namespace springy {
 
 namespace {
@@ -181,32 +176,9 @@ inline bool hingeForces(const Hinge& hg, const HingeTerms& terms, const Vec3* x,
 // instruction set or thread computes them (tests/test_forces.cpp checks against hingeForces).
 using lanes::Lanes;
 
-struct V3L {
-  Lanes x, y, z;
-};
-inline V3L operator+(const V3L& a, const V3L& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-inline V3L operator-(const V3L& a, const V3L& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-inline V3L operator-(const V3L& a) { return {-a.x, -a.y, -a.z}; }
-inline V3L operator*(const V3L& a, const Lanes& s) { return {a.x * s, a.y * s, a.z * s}; }
-inline Lanes dot(const V3L& a, const V3L& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-inline V3L cross(const V3L& a, const V3L& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-inline Lanes sqrt(const Lanes& a) {
-  Lanes r;
-  for (int l = 0; l < 4; ++l) r[l] = std::sqrt(a[l]);
-  return r;
-}
-
-// Four vertices' positions (or velocities) v[index[r]], r = 0..3, into lanes in transpose's order
-// (sim/lanes.h): x and y as one 16-byte pair a vertex.
-inline V3L loadLanes(const Vec3* v, const uint32_t index[4]) {
-  V3L out;
-  lanes::transpose(lanes::loadPair(&v[index[0]].x), lanes::loadPair(&v[index[1]].x), lanes::loadPair(&v[index[2]].x),
-                   lanes::loadPair(&v[index[3]].x), out.x, out.y);
-  out.z = Lanes{v[index[0]].z, v[index[2]].z, v[index[1]].z, v[index[3]].z};
-  return out;
-}
+using lanes::gather;
+using lanes::sqrt;
+using lanes::V3L;
 
 // The forces of hinges hs[0..3] into out[r][corner]; ok[r] is hingeForces' result. Inlined into
 // applyHinges' clones (a call per packet to a clone of its own measured slower: the packet's
@@ -217,8 +189,8 @@ __attribute__((always_inline)) inline void hingePacket(const Hinge* const hs[4],
   V3L p[4], w[4];
   for (int i = 0; i < 4; ++i) {
     const uint32_t index[4] = {hs[0]->v[i], hs[1]->v[i], hs[2]->v[i], hs[3]->v[i]};
-    p[i] = loadLanes(x, index);
-    w[i] = loadLanes(v, index);
+    p[i] = gather(x, index);
+    w[i] = gather(v, index);
   }
   const auto perHinge = [&](auto value) { return Lanes{value(0), value(2), value(1), value(3)}; };  // lane order
   const Lanes restCos = perHinge([&](int r) { return ts[r]->restCos; });

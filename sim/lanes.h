@@ -7,11 +7,16 @@
 // add (-ffp-contract=off), so each element's result is bit-identical to the scalar kernel's
 // whichever lane computes it; a kernel that sums over elements says in which order.
 
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <cstring>
 
-// These helpers return 32-byte vectors; GCC's note that such calls have another ABI with and
-// without AVX concerns no caller (they are inlined into the kernels).
-#pragma GCC diagnostic push
+#include "sim/vec3.h"
+
+// These helpers, and the kernels' own inlined helpers, pass and return 32-byte vectors; GCC's
+// note that such calls have another ABI with and without AVX concerns no caller: everything
+// using them is inlined into a kernel's clone. Ignored for the files that include this one.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace springy::lanes {
@@ -43,9 +48,46 @@ inline void untranspose(Lanes x, Lanes y, Pair out[4]) {
   out[3] = __builtin_shufflevector(odd, odd, 2, 3);
 }
 
-// Element r's lane in transpose's order.
+// Element r's lane in transpose's order (the order is its own inverse: lane l holds element
+// kLaneOf[l]).
 constexpr int kLaneOf[4] = {0, 2, 1, 3};
 
-}  // namespace springy::lanes
+// Four vectors, one per lane, with Vec3's operations in the same order.
+struct V3L {
+  Lanes x, y, z;
+};
+inline V3L operator+(const V3L& a, const V3L& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3L operator-(const V3L& a, const V3L& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3L operator-(const V3L& a) { return {-a.x, -a.y, -a.z}; }
+inline V3L operator*(const V3L& a, const Lanes& s) { return {a.x * s, a.y * s, a.z * s}; }
+inline Lanes dot(const V3L& a, const V3L& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline V3L cross(const V3L& a, const V3L& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline Lanes sqrt(const Lanes& a) {
+  Lanes r;
+  for (int l = 0; l < 4; ++l) r[l] = std::sqrt(a[l]);  // one vsqrtpd with AVX
+  return r;
+}
 
-#pragma GCC diagnostic pop
+static_assert(offsetof(Vec3, y) == offsetof(Vec3, x) + sizeof(double), "a Vec3's x and y load as one pair");
+
+// Vectors v[index[r]], r = 0..3, into lanes in transpose's order: x and y as one 16-byte pair.
+inline V3L gather(const Vec3* v, const uint32_t index[4]) {
+  V3L out;
+  transpose(loadPair(&v[index[0]].x), loadPair(&v[index[1]].x), loadPair(&v[index[2]].x), loadPair(&v[index[3]].x),
+            out.x, out.y);
+  out.z = Lanes{v[index[0]].z, v[index[2]].z, v[index[1]].z, v[index[3]].z};
+  return out;
+}
+// Lane values back to four vectors, element r's into out[r] (transpose's order undone).
+inline void scatter(const V3L& a, Vec3 out[4]) {
+  Pair xy[4];
+  untranspose(a.x, a.y, xy);
+  for (int r = 0; r < 4; ++r) {
+    storePair(&out[r].x, xy[r]);
+    out[r].z = a.z[kLaneOf[r]];
+  }
+}
+
+}  // namespace springy::lanes

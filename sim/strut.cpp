@@ -7,10 +7,6 @@
 
 #include "sim/lanes.h"
 
-// strutPacket returns 32-byte vectors through inlined helpers local to this file; GCC's note
-// that such calls have another ABI with and without AVX concerns no caller.
-#pragma GCC diagnostic ignored "-Wpsabi"
-
 namespace springy {
 
 namespace {

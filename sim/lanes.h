@@ -2,10 +2,10 @@
 
 // Four doubles in one vector (GCC's vector extension: one AVX register where a function is
 // compiled for AVX2, chosen at run time by target_clones, else two SSE2 halves), and the
-// helpers the packet kernels share (struts and hinges, the enclosed volume). Each lane performs
-// a scalar kernel's operations in the same order, and the build never fuses a multiply and an
-// add (-ffp-contract=off), so each element's result is bit-identical to the scalar kernel's
-// whichever lane computes it; a kernel that sums over elements says in which order.
+// helpers the packet kernels share (struts, hinges, the enclosed volume, the wind). Each lane
+// performs a scalar kernel's operations in the same order, and the build never fuses a multiply
+// and an add (-ffp-contract=off), so each element's result is bit-identical to the scalar
+// kernel's whichever lane computes it; a kernel that sums over elements says in which order.
 
 #include <cmath>
 #include <cstddef>

@@ -33,7 +33,6 @@ using lanes::Lanes;
 using lanes::loadPair;
 using lanes::Pair;
 using lanes::transpose;
-static_assert(offsetof(Vec3, y) == offsetof(Vec3, x) + sizeof(double), "a Vec3's x and y load as one pair");
 static_assert(offsetof(Strut, stiffness) == offsetof(Strut, restLength) + sizeof(double),
               "a strut's rest length and stiffness load as one pair");
 

@@ -14,6 +14,7 @@
 #include "app/atomic_file.h"
 #include "app/commands.h"
 #include "app/csv.h"
+#include "app/export.h"
 #include "app/progress.h"
 #include "app/runner.h"
 #include "sim/error.h"
@@ -63,7 +64,7 @@ void printRunHeader(const std::string& path, const SceneDesc& scene, const World
 // given, receives a trace row per frame and body. Returns the first failure; stops early, with
 // none, when a signal arrives (the caller asks interrupted()).
 std::optional<Failure> runFrames(const std::string& path, const SceneDesc& scene, World& world, Monitor& monitor,
-                                 RestWatch& rest, std::ostream* rows) {
+                                 RestWatch& rest, std::ostream* rows, MotionExport* exporter) {
   const double frame = 1.0 / scene.view.render.fps;
   const long frames = frameCount(scene.duration, frame);
   const double watchFrom = scene.duration - RestWatch::kWindow;
@@ -75,6 +76,7 @@ std::optional<Failure> runFrames(const std::string& path, const SceneDesc& scene
     failure = advanceTo(world, monitor, static_cast<double>(k) * frame);
     progress.update(k, std::to_string(world.stepCount()) + " steps");
     if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
+    if (exporter && !failure) exporter->frame(world, monitor);
     if (rows) {
       for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
         writeTraceRow(*rows, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
@@ -87,7 +89,34 @@ std::optional<Failure> runFrames(const std::string& path, const SceneDesc& scene
 
 }  // namespace
 
+std::vector<std::string> exportOutputs(const std::vector<std::string>& scenes, const std::string& output,
+                                       const std::string& format, const std::string& option) {
+  namespace fs = std::filesystem;
+  const bool directory = isDirectory(output) || (!output.empty() && output.back() == '/') || scenes.size() > 1;
+  if (!directory) {
+    exportFormatOf(output, option);  // a file: its extension must name a format
+    return {output};
+  }
+  const std::string extension = "." + format;
+  exportFormatOf("scene" + extension, option);
+  makeDirectories(output, option);
+  std::vector<std::string> outputs;
+  for (const std::string& scene : scenes) {
+    const std::string file = (fs::path(output) / (fs::path(scene).stem().string() + extension)).string();
+    for (std::size_t j = 0; j < outputs.size(); ++j) {
+      if (outputs[j] == file) throw Error(scenes[j] + " and " + scene + " would both be exported to " + file);
+    }
+    outputs.push_back(file);
+  }
+  return outputs;
+}
+
 int runCheck(const CheckOptions& options) {
+  const std::string who = "springy " + options.command + ": ";  // messages' prefix
+  std::vector<std::string> exports;
+  if (!options.exportOutput.empty()) {
+    exports = exportOutputs(options.scenes, options.exportOutput, options.exportFormat, options.exportOption);
+  }
   std::unique_ptr<AtomicFile> traceFile;
   std::ofstream trace;
   if (!options.trace.empty()) {
@@ -101,7 +130,8 @@ int runCheck(const CheckOptions& options) {
   if (!options.junit.empty()) junitFile = std::make_unique<AtomicFile>(options.junit, options.scenes);
   std::vector<SceneRecord> records;
   int failures = 0;
-  for (const std::string& path : options.scenes) {
+  for (std::size_t sceneIndex = 0; sceneIndex < options.scenes.size(); ++sceneIndex) {
+    const std::string& path = options.scenes[sceneIndex];
     SceneRecord& record = records.emplace_back();
     record.path = path;
     record.scene = std::filesystem::path(path).stem().string();
@@ -110,7 +140,7 @@ int runCheck(const CheckOptions& options) {
     try {
       scene = loadSceneWith(path, options.overrides, true, &untried);
     } catch (const Error& e) {
-      std::cerr << "springy check: " << e.what() << "\n";
+      std::cerr << who << e.what() << "\n";
       record.status = SceneRecord::Status::Error;
       record.message = e.what();
       ++failures;
@@ -129,6 +159,7 @@ int runCheck(const CheckOptions& options) {
     std::ostringstream tried;  // the trace rows of a run that is the default step's try, kept until it passes
     auto wallStart = std::chrono::steady_clock::now();
     bool retryFailed = false;
+    std::unique_ptr<MotionExport> exporter;
     // One run; a second only when it was the default step's try and went unstable (an untried
     // default step was run twice before: once as the advisor's try, once as the check).
     for (;;) {
@@ -139,16 +170,31 @@ int runCheck(const CheckOptions& options) {
       tried.str("");
       std::ostream* rows = !trace.is_open() ? nullptr : untried ? static_cast<std::ostream*>(&tried) : &trace;
       rest = RestWatch{};
-      failure = runFrames(path, scene, world, monitor, rest, rows);
+      try {
+        exporter.reset();  // a failed try's output is removed before the next is opened
+        if (!exports.empty()) {
+          const double frame = 1.0 / scene.view.render.fps;
+          exporter = openExport(exports[sceneIndex], scene, world, frameCount(scene.duration, frame), frame,
+                                options.scenes);
+          exporter->frame(world, monitor);
+        }
+        failure = runFrames(path, scene, world, monitor, rest, rows, exporter.get());
+      } catch (const Error& e) {
+        std::cerr << who << e.what() << "\n";
+        record.status = SceneRecord::Status::Error;
+        record.message = e.what();
+        retryFailed = true;
+        break;
+      }
       if (interrupted()) {
-        std::cerr << "springy check: interrupted\n";
+        std::cerr << who << "interrupted\n";
         return interruptedExitStatus();
       }
       if (!failure) break;
       try {
         if (!retryDefaultStep(path, scene, *failure, untried, threadCount(options.overrides), std::cerr)) break;
       } catch (const Error& e) {
-        std::cerr << "springy check: " << e.what() << "\n";
+        std::cerr << who << e.what() << "\n";
         record.status = SceneRecord::Status::Error;
         record.message = e.what();
         retryFailed = true;
@@ -260,9 +306,24 @@ int runCheck(const CheckOptions& options) {
         failure = Failure{b, world.stepCount(), world.time(), what};
       }
     }
+    if (exporter && !failure) {
+      try {
+        exporter->commit();
+        std::printf("  exported: %s\n", exporter->written().c_str());
+      } catch (const Error& e) {
+        std::cerr << who << e.what() << "\n";
+        record.status = SceneRecord::Status::Error;
+        record.message = e.what();
+        ++failures;
+        continue;
+      }
+    } else if (exporter) {
+      exporter.reset();
+      std::printf("  not exported: the run failed\n");
+    }
     if (failure) {
       std::printf("  FAILED: %s\n", failure->message.c_str());
-      std::cerr << "springy check: " << path << ": " << failure->message << "\n";
+      std::cerr << who << path << ": " << failure->message << "\n";
       record.status = SceneRecord::Status::Failed;
       record.failedBody = failure->body;
       record.message = failure->message;

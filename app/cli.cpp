@@ -96,6 +96,35 @@ CommandLine::CommandLine() {
   checkCmd->add_option("--junit", check.junit,
                        "Write the results as JUnit XML: a test case per scene and body, failures with the message");
 
+  checkCmd
+      ->add_option("--export", check.exportOutput,
+                   "Also write the run's motion: FILE.pc2 (Blender's point cache, with FILE.obj), FILE.glb (glTF 2.0) "
+                   "or FILE.pvd (ParaView's .vtu series), or a directory (several scenes; --export-format)");
+  checkCmd->add_option("--export-format", check.exportFormat, "With --export DIR: pc2, glb or pvd")
+      ->check(CLI::IsMember({"pc2", "glb", "pvd"}))
+      ->capture_default_str();
+
+  exportCmd = app.add_subcommand(
+      "export", "Simulate scenes (checked as `check` does) and write every frame of every body for Blender, "
+                "ParaView or a glTF viewer (docs/export.md)");
+  exportCmd->add_option("scenes", exportRun.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
+  exportCmd
+      ->add_option("-o,--output", exportRun.exportOutput,
+                   "FILE.pc2 (Blender's point cache, with FILE.obj and FILE.mtl), FILE.glb (glTF 2.0 binary) or "
+                   "FILE.pvd (ParaView's time series, with the folder FILE/ of .vtu files); or a directory that "
+                   "gets SCENE.EXT for each scene (--format)")
+      ->required();
+  exportRun.exportOption = "-o";
+  exportRun.command = "export";
+  exportCmd->add_option("--format", exportRun.exportFormat, "With -o DIR: pc2, glb or pvd")
+      ->check(CLI::IsMember({"pc2", "glb", "pvd"}))
+      ->capture_default_str();
+  exportCmd->add_option("--fps", exportFps, "Frames per second written (default: the scene's [render] fps)")
+      ->check(CLI::Range(1.0, 240.0));
+  addRunOverrides(exportCmd, exportRun.overrides);
+  exportCmd->add_option("--trace", exportRun.trace, "Also write check's per-frame trace (CSV)");
+  exportCmd->add_option("--json", exportRun.json, "Also write check's per-body results as JSON");
+
   suggestCmd =
       app.add_subcommand("suggest", "Estimate stable dt and propose stable T, P, T_theta, P_theta for a scene");
   suggestCmd->add_option("scenes", suggest.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
@@ -186,6 +215,14 @@ CommandLine::CommandLine() {
 
 int CommandLine::dispatch() {
   if (checkCmd->parsed()) return runCheck(check);
+  if (exportCmd->parsed()) {
+    if (exportFps) {
+      char fps[64];
+      std::snprintf(fps, sizeof fps, "render.fps=%.17g", *exportFps);
+      exportRun.overrides.sets.push_back(fps);
+    }
+    return runCheck(exportRun);
+  }
   if (suggestCmd->parsed()) return runSuggest(suggest);
   if (studyCmd->parsed()) return runStudy(study);
 #if defined(SPRINGY_HAVE_RENDER)

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,8 @@ struct CommandLine {
 
   CLI::App app{"springy: soft bodies as springy meshes, simulated and rendered offscreen"};
   CheckOptions check;
+  CheckOptions exportRun;  // `springy export`: a check whose motion is exported
+  std::optional<double> exportFps;
   SuggestOptions suggest;
   StudyOptions study;
   RenderOptions render;
@@ -29,6 +32,7 @@ struct CommandLine {
   RunTaskOptions runTask;
   GatherOptions gather;
   CLI::App* checkCmd = nullptr;
+  CLI::App* exportCmd = nullptr;
   CLI::App* suggestCmd = nullptr;
   CLI::App* studyCmd = nullptr;
   std::vector<std::string> args;  // the arguments parsed (without the program's name)

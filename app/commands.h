@@ -21,8 +21,20 @@ struct CheckOptions {
   std::string json;        // --json FILE: the records (app/records.h), empty for none
   std::string junit;       // --junit FILE: the records as JUnit XML, empty for none
   std::vector<SceneRecord>* records = nullptr;  // when set, also receives the records (sweep's run-task)
+  // --export OUT (`springy export -o OUT`): the run's motion (app/export.h), a file for one scene or
+  // a directory that gets SCENE.EXT for each (EXT from exportFormat); empty for none.
+  std::string exportOutput;
+  std::string exportFormat = "glb";  // for a directory: pc2, glb or pvd
+  std::string command = "check";          // the command run, for messages ("export")
+  std::string exportOption = "--export";  // the option that named exportOutput, for messages ("-o" in `export`)
 };
 int runCheck(const CheckOptions& options);
+
+// The file each scene's motion is exported to: -o names a file with a format's extension (one
+// scene), or a directory (it exists, ends in '/', or there are several scenes) that gets
+// SCENE.EXT for each, EXT given by `format`. Creates the directory; throws springy::Error.
+std::vector<std::string> exportOutputs(const std::vector<std::string>& scenes, const std::string& output,
+                                       const std::string& format, const std::string& option);
 
 // Command-line overrides of a scene's [render] table.
 struct RenderOverrides {

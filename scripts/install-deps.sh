@@ -24,6 +24,9 @@ packages=(
   munge slurmctld slurmd slurm-client  # sweeps: the Slurm test's single-node cluster (scripts/slurm-local.sh)
   parallel               # sweeps: the README's GNU parallel example, tested
   python3                # tests: a JUnit consumer (tests/junit_check.py, xml.etree)
+  blender                # tests: export round trip, Blender reads the PC2 on the OBJ and the GLB (tests/blender_roundtrip.py)
+  python3-vtk9 python3-numpy  # tests: export round trip, VTK (ParaView's readers) reads the PVD series
+  nodejs                 # tests: the Khronos glTF validator (npm gltf-validator, tests/js)
   clang libclang-rt-14-dev llvm  # fuzzing (scripts/fuzz.sh): clang 14, libFuzzer and sanitizer runtimes, llvm-symbolizer
 )
 SUDO=""
@@ -36,4 +39,16 @@ done
 if [ ${#missing[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+# npm: Debian's package, unless a Node.js that carries its own npm is installed already (the
+# nodesource build conflicts with Debian's npm).
+if ! command -v npm >/dev/null; then
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends npm
+fi
+# The glTF validator, at the version package-lock.json pins; fetched again only when the lock changed.
+js="$(dirname "$0")/../tests/js"
+if ! cmp -s "$js/package-lock.json" "$js/node_modules/.springy-lock" 2>/dev/null; then
+  npm ci --prefix "$js" --no-audit --no-fund --loglevel=error
+  cp "$js/package-lock.json" "$js/node_modules/.springy-lock"
 fi

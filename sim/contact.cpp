@@ -147,6 +147,7 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   push_.assign(n, Vec3{});
   changed_.assign(n, 0);
   touched_.assign(n, 0);
+  contactOf_.assign(n, 0);
   dirty_.assign(n, 0);
   stopped_.assign(n, 0);
   group_.resize(n);
@@ -647,6 +648,8 @@ bool BodyContacts::resolve(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, s
 bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
   const Model& model = *model_;
   last_ = ContactStats{};
+  for (uint32_t i : contactList_) contactOf_[i] = 0;
+  contactList_.clear();
   bool finite = true;
   for (uint32_t b : active_) {
     const BodyInfo& info = model.bodies[b];
@@ -671,7 +674,17 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
   for (int pass = 0; pass < impulsePasses_ && !settled; ++pass) {
     if (!findContacts(x0, dt, contacts_, pass == 0 ? &last_.candidates : nullptr)) return overflow(x0, x1, v1, dt);
     ++last_.passes;
-    if (pass == 0) last_.contacts = contacts_.size();
+    if (pass == 0) {
+      last_.contacts = contacts_.size();
+      for (const Contact& c : contacts_) {
+        for (int k = 0; k < 4; ++k) {
+          const uint32_t i = c.vertex[k];
+          if (c.weight[k] == 0.0 || i >= vertexCount_ || contactOf_[i]) continue;
+          contactOf_[i] = 1;
+          contactList_.push_back(i);
+        }
+      }
+    }
     bool applied = false;
     for (const Contact& c : contacts_) {
       if (impulse(c, dt, pass == 0)) {

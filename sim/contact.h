@@ -108,6 +108,9 @@ class BodyContacts {
 
   const ContactStats& lastStep() const { return last_; }
   const ContactStats& sinceStart() const { return total_; }
+  // Whether vertex i had a contact (with a body, itself or a collider's edge or corner) in the
+  // last step's first pass: for exports that show where bodies touch.
+  bool touching(std::size_t i) const { return i < vertexCount_ && contactOf_[i] != 0; }
   // Passes of impulses before the fail-safe (kImpulsePasses; 0 leaves everything to the
   // fail-safe, which tests use to exercise it alone).
   void setImpulsePasses(int passes) { impulsePasses_ = passes; }
@@ -227,6 +230,8 @@ class BodyContacts {
   std::vector<Vec3> push_;  // the part of u_ - u0_ that moves positions only (kSeparationRate)
   std::vector<uint8_t> changed_, stopped_;
   std::vector<uint8_t> touched_;  // changed in the current pass (per vertex)
+  std::vector<uint8_t> contactOf_;        // per vertex: in a contact of the last step (touching())
+  std::vector<uint32_t> contactList_;     // the vertices contactOf_ marks
   std::vector<uint8_t> dirty_;    // changed in the pass before (per vertex; collider vertices never)
   std::vector<uint32_t> touchedList_, dirtyList_;  // the vertices with touched_, dirty_ set
   std::vector<uint32_t> vertexBody_;               // per vertex of an active body: the body

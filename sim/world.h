@@ -157,6 +157,9 @@ class World {
   // Whether vertex i is resting on a static collider: it touched one within the colliders'
   // resting window (Colliders::restingWindow). For drawing (a smooth surface stays flat there).
   bool restsOnCollider(std::size_t i) const { return !sinceContact_.empty() && restingAt(i); }
+  // Whether vertex i touches something: it rests on a static collider, or had a contact with a
+  // body (another, or its own) in the last step. For exports.
+  bool touching(std::size_t i) const { return restsOnCollider(i) || (contacts_ && contacts_->touching(i)); }
   const std::vector<Vec3>& positions() const { return x_; }
   const std::vector<Vec3>& velocities() const { return v_; }
   const std::vector<ForceStage>& forceStages() const { return forces_->stages(); }

@@ -1,0 +1,147 @@
+#include "app/export.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+
+#include "sim/error.h"
+
+namespace springy {
+
+ExportFormat exportFormatOf(const std::string& path, const std::string& option) {
+  const std::size_t slash = path.rfind('/');
+  const std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::size_t dot = base.rfind('.');
+  std::string ext = dot == std::string::npos || dot == 0 ? std::string() : base.substr(dot);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".pc2") return ExportFormat::PointCache;
+  if (ext == ".glb") return ExportFormat::Gltf;
+  if (ext == ".pvd") return ExportFormat::VtkSeries;
+  std::string why = ext.empty() ? "has no extension" : "'" + ext + "' is not a format springy writes";
+  if (ext == ".usd" || ext == ".usda" || ext == ".usdc" || ext == ".usdz") {
+    why += " (USD is not written: no USD reader is at hand to test it against; .glb carries the same motion)";
+  } else if (ext == ".gltf") {
+    why += " (glTF is written as one binary file: .glb)";
+  } else if (ext == ".vtu" || ext == ".vtk") {
+    why += " (a run is a time series: .pvd, with a folder of .vtu files beside it)";
+  }
+  throw Error(option + " " + path + ": " + why +
+              "; give .pc2 (Blender's point cache, with a .obj beside it), .glb (glTF 2.0) or .pvd (ParaView's time "
+              "series of .vtu files)");
+}
+
+const char* exportExtension(ExportFormat format) {
+  switch (format) {
+    case ExportFormat::PointCache: return ".pc2";
+    case ExportFormat::Gltf: return ".glb";
+    case ExportFormat::VtkSeries: return ".pvd";
+  }
+  return "";
+}
+
+std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world) {
+  const Model& model = world.model();
+  std::vector<ExportBody> bodies;
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    const BodyInfo& info = model.bodies[b];
+    const BodyDesc& desc = scene.bodies[b];
+    ExportBody& out = bodies.emplace_back();
+    out.name = info.name;
+    out.body = b;
+    out.look = b < scene.view.bodies.size() ? scene.view.bodies[b] : Material{};
+    if (!desc.drawBinding.empty()) {
+      // The user's own mesh over the proxy: its vertices, bound to the proxy's (mesh) vertices.
+      out.binding = desc.drawBinding;
+      for (Triangle& t : out.binding.corners) {
+        for (uint32_t& v : t) v = info.modelVertex[v];
+      }
+      out.triangles = desc.drawMesh.triangles;
+      continue;
+    }
+    // The simulated mesh in the mesh's own order: drawn vertex k is mesh vertex k.
+    out.modelVertex = info.modelVertex;
+    std::vector<uint32_t> meshOf(info.vertexCount);
+    for (uint32_t k = 0; k < info.modelVertex.size(); ++k) meshOf[info.modelVertex[k] - info.firstVertex] = k;
+    out.triangles.reserve(info.faceCount);
+    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
+      Triangle t = model.faces[f];
+      for (uint32_t& v : t) v = meshOf[v - info.firstVertex];
+      out.triangles.push_back(t);
+    }
+  }
+  return bodies;
+}
+
+void drawnPositions(const ExportBody& body, const World& world, std::vector<double>& xyz) {
+  const std::vector<Vec3>& x = world.positions();
+  xyz.resize(3 * body.vertexCount());
+  if (body.embedded()) {
+    placeEmbedded(body.binding, &x[0].x, xyz.data());
+    return;
+  }
+  for (std::size_t k = 0; k < body.modelVertex.size(); ++k) {
+    const Vec3& p = x[body.modelVertex[k]];
+    xyz[3 * k] = p.x, xyz[3 * k + 1] = p.y, xyz[3 * k + 2] = p.z;
+  }
+}
+
+void vertexFields(const ExportBody& body, const World& world, VertexFields& out) {
+  const Model& model = world.model();
+  const BodyInfo& info = model.bodies[body.body];
+  const std::vector<Vec3>& x = world.positions();
+  const std::vector<Vec3>& v = world.velocities();
+  // The largest strain at each of the body's (model) vertices.
+  std::vector<float> strain(info.vertexCount, 0.0f);
+  for (uint32_t s = info.firstStrut; s < info.firstStrut + info.strutCount; ++s) {
+    const Strut& st = model.struts[s];
+    if (!(st.restLength > 0.0)) continue;
+    const float e = static_cast<float>(std::abs(length(x[st.j] - x[st.i]) - st.restLength) / st.restLength);
+    float& a = strain[st.i - info.firstVertex];
+    float& b = strain[st.j - info.firstVertex];
+    a = std::max(a, e), b = std::max(b, e);
+  }
+  const auto pinned = [&](uint32_t i) -> uint8_t { return model.invMass[i] == 0.0 ? 1 : 0; };
+  const std::size_t n = body.vertexCount();
+  out.velocity.resize(3 * n);
+  out.strain.resize(n);
+  out.contact.resize(n);
+  out.pinned.resize(n);
+  if (!body.embedded()) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const uint32_t i = body.modelVertex[k];
+      out.velocity[3 * k] = v[i].x, out.velocity[3 * k + 1] = v[i].y, out.velocity[3 * k + 2] = v[i].z;
+      out.strain[k] = strain[i - info.firstVertex];
+      out.contact[k] = world.touching(i) ? 1 : 0;
+      out.pinned[k] = pinned(i);
+    }
+    return;
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    const Triangle& t = body.binding.corners[k];
+    const double u = body.binding.coords[k][0], w = body.binding.coords[k][1];
+    const Vec3 vel = v[t[0]] * (1.0 - u - w) + v[t[1]] * u + v[t[2]] * w;
+    out.velocity[3 * k] = vel.x, out.velocity[3 * k + 1] = vel.y, out.velocity[3 * k + 2] = vel.z;
+    float e = 0.0f;
+    uint8_t touching = 0, held = 1;
+    for (uint32_t i : t) {
+      e = std::max(e, strain[i - info.firstVertex]);
+      touching = touching || world.touching(i);
+      held = held && pinned(i);
+    }
+    out.strain[k] = e;
+    out.contact[k] = touching;
+    out.pinned[k] = held;
+  }
+}
+
+std::unique_ptr<MotionExport> openExport(const std::string& path, const SceneDesc& scene, const World& world,
+                                         long frames, double frameTime, const std::vector<std::string>& inputs) {
+  switch (exportFormatOf(path, "--export")) {
+    case ExportFormat::PointCache: return openPointCache(path, scene, world, frames, frameTime, inputs);
+    case ExportFormat::Gltf: return openGltf(path, scene, world, frames, frameTime, inputs);
+    case ExportFormat::VtkSeries: return openVtkSeries(path, scene, world, frames, frameTime, inputs);
+  }
+  throw Error(path + ": no writer for this format");
+}
+
+}  // namespace springy

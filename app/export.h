@@ -1,0 +1,89 @@
+// springy app: the simulated motion written out for other programs (`springy export`, `check
+// --export`): every output frame of every body, as the mesh a viewer sees (the user's own mesh
+// where a proxy simulates it), in one of three formats chosen by the output's extension:
+//   .pc2  Blender's point cache (the Mesh Cache modifier reads it) and a .obj (+ .mtl) beside it
+//         with the bodies at the first frame, one object whose vertices are the cache's points
+//   .glb  glTF 2.0 binary: a mesh per body with its colour, its motion as one morph target per
+//         frame and an animation of their weights; the visible colliders as still meshes
+//   .pvd  ParaView's time series: a folder of .vtu files, one per body and frame, with per-vertex
+//         velocity, strain, contact, pinned (and mass) and the body's volume as field data
+// Every format streams: a frame is written when it is simulated, so memory does not grow with
+// the run's length. Every output appears complete or not at all (AtomicFile; a folder is built
+// under a temporary name and renamed), and the same run writes the same bytes on any thread count.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+#include "sim/monitor.h"
+
+namespace springy {
+
+enum class ExportFormat { PointCache, Gltf, VtkSeries };
+
+// The format for an output's extension (case-insensitive). Throws springy::Error naming `option`
+// and the file for any other, saying which extensions work.
+ExportFormat exportFormatOf(const std::string& path, const std::string& option);
+// The extension each format is written with (".pc2", ".glb", ".pvd").
+const char* exportExtension(ExportFormat format);
+
+// One exported body: the drawn mesh's topology and how its vertices follow the model.
+struct ExportBody {
+  std::string name;
+  uint32_t body = 0;                   // in the model
+  std::vector<Triangle> triangles;     // the drawn mesh's, its own vertex indices
+  std::vector<uint32_t> modelVertex;   // per drawn vertex: the model vertex it is (empty when embedded)
+  Embedding binding;                   // per drawn vertex: its proxy triangle (corners: model vertices)
+  Material look;
+  std::size_t vertexCount() const { return binding.empty() ? modelVertex.size() : binding.size(); }
+  bool embedded() const { return !binding.empty(); }
+};
+
+// The bodies of a world as exported: vertex k of a body drawn with its simulated mesh is the
+// mesh's vertex k (the numbering of messages and pins), not the model's spatial order.
+std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world);
+
+// The drawn positions of a body in `world` (x, y, z per drawn vertex).
+void drawnPositions(const ExportBody& body, const World& world, std::vector<double>& xyz);
+
+// Per-vertex fields of a body's drawn mesh in `world`. An embedded vertex takes them from its
+// proxy triangle: its velocity the corners' by the barycentric weights, its strain their largest,
+// touching if a corner touches, pinned if all three are.
+struct VertexFields {
+  std::vector<double> velocity;   // x, y, z per vertex [m/s]
+  std::vector<float> strain;      // the largest |l - l0| / l0 of the struts at the vertex
+  std::vector<uint8_t> contact;   // 1: touching a collider or a body (World::touching)
+  std::vector<uint8_t> pinned;    // 1: held in place
+};
+void vertexFields(const ExportBody& body, const World& world, VertexFields& out);
+
+// A writer of one run. frame() is called for the first instant and then after each output
+// frame; commit() makes the output appear (the destructor without commit() removes every
+// temporary file, so a failure or a signal leaves nothing behind).
+class MotionExport {
+ public:
+  virtual ~MotionExport() = default;
+  virtual void frame(const World& world, const Monitor& monitor) = 0;
+  virtual void commit() = 0;
+  // What commit() wrote, for the closing message ("run.pc2 and run.obj").
+  virtual std::string written() const = 0;
+};
+
+// Opens the writer for `path` (its format by extension) for a run of `frames` output frames after
+// the first instant, frame interval `frameTime`. Checks at once that the output can be written
+// (a directory that does not exist, a folder of the series that springy did not make, an input
+// named as output): throws springy::Error before any simulation. `inputs`: files never written over.
+std::unique_ptr<MotionExport> openExport(const std::string& path, const SceneDesc& scene, const World& world,
+                                         long frames, double frameTime, const std::vector<std::string>& inputs);
+
+// The writers (app/export_*.cpp).
+std::unique_ptr<MotionExport> openPointCache(const std::string& path, const SceneDesc& scene, const World& world,
+                                             long frames, double frameTime, const std::vector<std::string>& inputs);
+std::unique_ptr<MotionExport> openGltf(const std::string& path, const SceneDesc& scene, const World& world,
+                                       long frames, double frameTime, const std::vector<std::string>& inputs);
+std::unique_ptr<MotionExport> openVtkSeries(const std::string& path, const SceneDesc& scene, const World& world,
+                                            long frames, double frameTime, const std::vector<std::string>& inputs);
+
+}  // namespace springy

@@ -1,0 +1,461 @@
+// glTF 2.0 binary (.glb; Khronos, "glTF 2.0 Specification", 2021): each body a mesh with its
+// colour as a material and its first frame as the base shape; frame k >= 1 is morph target k - 1
+// (the positions' and normals' change from the base), and an animation sets its weight to 1 at
+// frame k's time, linearly between frames, so a viewer plays the run and interpolates between
+// frames. The weights are a sparse accessor (one 1 per frame over zeros): frames x targets
+// values would grow with the square of the run's length. The visible colliders are still meshes
+// (a plane as a square around the bodies).
+//
+// A GLB is a 12-byte header, the JSON chunk, then the binary chunk; the JSON holds every accessor's
+// range, known only at the end. So the frames' data stream to a spill file (unlinked at once, so
+// nothing is left behind), and commit() writes the header and the JSON, then copies the spill file
+// after them. The JSON is written with nlohmann::json: tinygltf's writer holds every buffer in
+// memory (Model::buffers), which a long run's frames must not be.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "app/atomic_file.h"
+#include "app/export.h"
+#include "sim/error.h"
+
+namespace springy {
+namespace {
+
+using nlohmann::json;
+
+constexpr int kFloat = 5126, kUnsignedInt = 5125;
+constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+// An anonymous file beside the output for the binary chunk (removed by the system when closed,
+// whatever happens).
+class SpillFile {
+ public:
+  SpillFile(const std::string& target) : target_(target) {
+    const std::size_t slash = target.rfind('/');
+    std::string name = (slash == std::string::npos ? std::string() : target.substr(0, slash + 1)) + ".springy-glb-XXXXXX";
+    fd_ = ::mkostemp(name.data(), O_CLOEXEC);
+    if (fd_ < 0) throw Error(target + ": cannot write here: " + errorText(errno));
+    ::unlink(name.c_str());
+  }
+  ~SpillFile() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  SpillFile(const SpillFile&) = delete;
+  SpillFile& operator=(const SpillFile&) = delete;
+
+  // Appends; returns the offset the bytes start at.
+  uint64_t write(const void* data, std::size_t size) {
+    const uint64_t at = size_;
+    const auto* p = static_cast<const uint8_t*>(data);
+    while (size > 0) {
+      const ssize_t n = ::write(fd_, p, size);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) fail(n < 0 ? errno : EIO);
+      p += n, size -= static_cast<std::size_t>(n), size_ += static_cast<uint64_t>(n);
+    }
+    return at;
+  }
+  template <typename T>
+  uint64_t write(const std::vector<T>& values) {
+    return write(values.data(), values.size() * sizeof(T));
+  }
+  uint64_t size() const { return size_; }
+  // Copies everything written into `out`.
+  void copyTo(AtomicFile& out) {
+    std::vector<uint8_t> chunk(1 << 20);
+    for (uint64_t at = 0; at < size_;) {
+      const ssize_t n = ::pread(fd_, chunk.data(), static_cast<std::size_t>(std::min<uint64_t>(chunk.size(), size_ - at)),
+                                static_cast<off_t>(at));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) fail(n < 0 ? errno : EIO);
+      out.write({chunk.data(), static_cast<std::size_t>(n)});
+      at += static_cast<uint64_t>(n);
+    }
+  }
+
+ private:
+  [[noreturn]] void fail(int error) {
+    throw Error(target_ + ": writing failed: " + errorText(error) + " (" + target_ + " left as it was)");
+  }
+  std::string target_;
+  int fd_ = -1;
+  uint64_t size_ = 0;
+};
+
+// Smooth vertex normals: each face's area-weighted normal summed at its corners, made unit
+// (a vertex of no face, or whose faces cancel, gets +y).
+void vertexNormals(const std::vector<double>& xyz, const std::vector<Triangle>& triangles, std::vector<double>& out) {
+  out.assign(xyz.size(), 0.0);
+  for (const Triangle& t : triangles) {
+    const double* a = &xyz[3 * t[0]];
+    const double* b = &xyz[3 * t[1]];
+    const double* c = &xyz[3 * t[2]];
+    const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    for (uint32_t v : t) {
+      for (int k = 0; k < 3; ++k) out[3 * v + k] += n[k];
+    }
+  }
+  for (std::size_t v = 0; v < out.size() / 3; ++v) {
+    double* n = &out[3 * v];
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (len > 0.0 && std::isfinite(len)) {
+      for (int k = 0; k < 3; ++k) n[k] /= len;
+    } else {
+      n[0] = 0.0, n[1] = 1.0, n[2] = 0.0;
+    }
+  }
+}
+
+// Float values and their range (an accessor's min and max, which glTF requires of positions and
+// animation inputs and which must be the stored floats' own).
+struct Floats {
+  std::vector<float> values;
+  std::array<float, 3> lo{}, hi{};
+  void fill(const std::vector<double>& source, const std::vector<double>* minus) {
+    values.resize(source.size());
+    lo.fill(std::numeric_limits<float>::infinity());
+    hi.fill(-std::numeric_limits<float>::infinity());
+    for (std::size_t i = 0; i < source.size(); ++i) {
+      const float f = static_cast<float>(minus ? source[i] - (*minus)[i] : source[i]);
+      values[i] = f;
+      lo[i % 3] = std::min(lo[i % 3], f), hi[i % 3] = std::max(hi[i % 3], f);
+    }
+  }
+};
+
+json vec(const std::array<float, 3>& a) { return json::array({a[0], a[1], a[2]}); }
+
+class GltfExport final : public MotionExport {
+ public:
+  GltfExport(const std::string& path, const SceneDesc& scene, const World& world, long frames, double frameTime,
+             const std::vector<std::string>& inputs)
+      : output_(path, inputs), spill_(path), frames_(frames), frameTime_(frameTime), bodies_(exportBodies(scene, world)) {
+    doc_["asset"] = {{"version", "2.0"}, {"generator", "springy 0.1"}};
+    doc_["scene"] = 0;
+    doc_["scenes"] = json::array({{{"name", scene.name}, {"nodes", json::array()}}});
+    for (const char* key : {"nodes", "meshes", "materials", "accessors", "bufferViews"}) doc_[key] = json::array();
+    for (const ExportBody& b : bodies_) {
+      std::vector<uint32_t> indices;
+      indices.reserve(3 * b.triangles.size());
+      for (const Triangle& t : b.triangles) indices.insert(indices.end(), t.begin(), t.end());
+      Primitive p;
+      p.indices = indexAccessor(indices);
+      p.material = material(b.name, b.look, world.model().bodies[b.body].open);
+      primitives_.push_back(p);
+    }
+    addColliders(scene, world);
+  }
+
+  void frame(const World& world, const Monitor&) override {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      const ExportBody& b = bodies_[i];
+      Primitive& p = primitives_[i];
+      drawnPositions(b, world, xyz_);
+      vertexNormals(xyz_, b.triangles, normals_);
+      const bool base = written_ == 0;
+      if (base) base_.push_back({xyz_, normals_});
+      position_.fill(xyz_, base ? nullptr : &base_[i].first);
+      normal_.fill(normals_, base ? nullptr : &base_[i].second);
+      // A buffer view per accessor: vertex data shared by two accessors would need a byte stride.
+      const std::size_t n = b.vertexCount();
+      const uint64_t positions = spill_.write(position_.values), normals = spill_.write(normal_.values);
+      if (base) {
+        p.position = accessor(bufferView(positions, 12 * n, kArrayBuffer), 0, n, "VEC3", &position_);
+        p.normal = accessor(bufferView(normals, 12 * n, kArrayBuffer), 0, n, "VEC3", &normal_);
+      } else {
+        // A morph target is kept as its offsets and range; its JSON is written at commit().
+        p.targets.push_back({positions, normals, position_.lo, position_.hi});
+      }
+    }
+    ++written_;
+  }
+
+  void commit() override {
+    if (written_ != frames_ + 1) {
+      throw Error(output_.target() + ": " + std::to_string(written_) + " frames written of " +
+                  std::to_string(frames_ + 1) + "; not written");
+    }
+    const int targets = static_cast<int>(frames_);
+    // The animation: the frames' times and, shared by every body, the weights (frame k: target
+    // k - 1 at 1, all others 0).
+    int times = -1, weights = -1;
+    if (targets > 0) {
+      std::vector<float> t(static_cast<std::size_t>(frames_ + 1));
+      for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<float>(static_cast<double>(k) * frameTime_);
+      times = accessor(bufferView(spill_.write(t), 4 * t.size(), -1), 0, t.size(), "SCALAR", nullptr);
+      doc_["accessors"][static_cast<std::size_t>(times)]["min"] = {t.front()};
+      doc_["accessors"][static_cast<std::size_t>(times)]["max"] = {t.back()};
+      std::vector<uint32_t> where(static_cast<std::size_t>(targets));
+      for (uint32_t k = 1; k <= static_cast<uint32_t>(targets); ++k) where[k - 1] = k * static_cast<uint32_t>(targets) + k - 1;
+      const std::vector<float> ones(static_cast<std::size_t>(targets), 1.0f);
+      const int whereView = bufferView(spill_.write(where), 4 * where.size(), -1);
+      const int onesView = bufferView(spill_.write(ones), 4 * ones.size(), -1);
+      json a = {{"componentType", kFloat},
+                {"count", static_cast<uint64_t>(frames_ + 1) * static_cast<uint64_t>(targets)},
+                {"type", "SCALAR"},
+                {"sparse",
+                 {{"count", targets},
+                  {"indices", {{"bufferView", whereView}, {"componentType", kUnsignedInt}}},
+                  {"values", {{"bufferView", onesView}}}}}};
+      weights = static_cast<int>(doc_["accessors"].size());
+      doc_["accessors"].push_back(std::move(a));
+    }
+    // The morph targets' accessors and buffer views follow every other, two of each per target:
+    // written as text (targetsJson), a JSON tree of them would cost kilobytes a frame and body.
+    const std::size_t firstAccessor = doc_["accessors"].size(), firstView = doc_["bufferViews"].size();
+    std::vector<std::string> targetText(bodies_.size());
+    std::string accessorText, viewText;
+    targetsJson(firstAccessor, firstView, targetText, accessorText, viewText);
+    if (targets > 0) {
+      doc_["accessors"].push_back("@targets' accessors@");
+      doc_["bufferViews"].push_back("@targets' buffer views@");
+    }
+    json samplers = json::array(), channels = json::array();
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      const Primitive& p = primitives_[i];
+      json primitive = {{"attributes", {{"POSITION", p.position}, {"NORMAL", p.normal}}},
+                        {"indices", p.indices},
+                        {"material", p.material},
+                        {"mode", 4}};
+      json mesh = {{"name", bodies_[i].name}, {"primitives", json::array({primitive})}};
+      if (targets > 0) {
+        mesh["primitives"][0]["targets"] = "@targets " + std::to_string(i) + "@";
+        mesh["weights"] = std::vector<float>(static_cast<std::size_t>(targets), 0.0f);
+        mesh["extras"] = {{"targetNames", "@names@"}};
+        const int node = static_cast<int>(doc_["nodes"].size());
+        channels.push_back({{"sampler", samplers.size()}, {"target", {{"node", node}, {"path", "weights"}}}});
+        samplers.push_back({{"input", times}, {"output", weights}, {"interpolation", "LINEAR"}});
+      }
+      addNode(bodies_[i].name, std::move(mesh));
+    }
+    for (json& still : stills_) {
+      const std::string name = still["name"];  // before the move: arguments have no order
+      addNode(name, std::move(still));
+    }
+    if (!samplers.empty()) {
+      doc_["animations"] = json::array({{{"name", "springy"}, {"samplers", samplers}, {"channels", channels}}});
+    }
+    doc_["buffers"] = json::array({{{"byteLength", spill_.size()}}});
+    // Pad the binary chunk to 4 bytes, the JSON chunk with spaces.
+    const uint8_t zeros[4] = {0, 0, 0, 0};
+    if (spill_.size() % 4) spill_.write(zeros, 4 - spill_.size() % 4);
+    std::string text = doc_.dump();
+    if (targets > 0) {
+      std::string names;
+      for (int k = 1; k <= targets; ++k) names += (k > 1 ? ",\"frame " : "\"frame ") + std::to_string(k) + "\"";
+      splice(text, "\"@targets' accessors@\"", accessorText);
+      splice(text, "\"@targets' buffer views@\"", viewText);
+      for (std::size_t i = 0; i < bodies_.size(); ++i) splice(text, "\"@targets " + std::to_string(i) + "@\"", targetText[i]);
+      while (text.find("\"@names@\"") != std::string::npos) splice(text, "\"@names@\"", "[" + names + "]");
+    }
+    text.append((4 - text.size() % 4) % 4, ' ');
+    const uint64_t total = 12 + 8 + text.size() + 8 + spill_.size();
+    if (total > UINT32_MAX) {
+      throw Error(output_.target() + ": the run is " + std::to_string(total >> 20) +
+                  " MiB as glTF, over GLB's 4 GiB; export fewer frames (--fps) or a shorter run, or use .pc2 or .pvd");
+    }
+    auto u32 = [](uint64_t v) {
+      const uint32_t x = static_cast<uint32_t>(v);
+      std::array<uint8_t, 4> b{};
+      std::memcpy(b.data(), &x, 4);
+      return b;
+    };
+    std::vector<uint8_t> head;
+    auto put = [&](const std::array<uint8_t, 4>& b) { head.insert(head.end(), b.begin(), b.end()); };
+    put({'g', 'l', 'T', 'F'});
+    put(u32(2));
+    put(u32(total));
+    put(u32(text.size()));
+    put({'J', 'S', 'O', 'N'});
+    output_.write(head);
+    output_.write(text);
+    head.clear();
+    put(u32(spill_.size()));
+    put({'B', 'I', 'N', 0});
+    output_.write(head);
+    spill_.copyTo(output_);
+    output_.commit();
+  }
+
+  std::string written() const override { return output_.target(); }
+
+ private:
+  struct Target {
+    uint64_t position = 0, normal = 0;  // offsets in the binary chunk
+    std::array<float, 3> lo{}, hi{};    // the positions' range
+  };
+  struct Primitive {
+    int indices = -1, material = -1, position = -1, normal = -1;
+    std::vector<Target> targets;  // frames 1, 2, ...
+  };
+
+  // The morph targets as JSON text: per body the primitive's "targets" array, and the accessors
+  // and buffer views they name (comma-separated, to follow the others'), numbered from `firstAccessor`
+  // and `firstView`.
+  void targetsJson(std::size_t firstAccessor, std::size_t firstView, std::vector<std::string>& targets,
+                   std::string& accessors, std::string& views) const {
+    std::size_t a = firstAccessor, v = firstView;
+    char item[320];
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      const std::size_t n = bodies_[i].vertexCount();
+      targets[i] = "[";
+      for (const Target& t : primitives_[i].targets) {
+        std::snprintf(item, sizeof item, "%s{\"POSITION\":%zu,\"NORMAL\":%zu}", targets[i].size() > 1 ? "," : "", a,
+                      a + 1);
+        targets[i] += item;
+        std::snprintf(item, sizeof item,
+                      ",{\"bufferView\":%zu,\"componentType\":%d,\"count\":%zu,\"type\":\"VEC3\","
+                      "\"min\":[%.9g,%.9g,%.9g],\"max\":[%.9g,%.9g,%.9g]}"
+                      ",{\"bufferView\":%zu,\"componentType\":%d,\"count\":%zu,\"type\":\"VEC3\"}",
+                      v, kFloat, n, t.lo[0], t.lo[1], t.lo[2], t.hi[0], t.hi[1], t.hi[2], v + 1, kFloat, n);
+        accessors += item;
+        std::snprintf(item, sizeof item,
+                      ",{\"buffer\":0,\"byteOffset\":%llu,\"byteLength\":%zu,\"target\":%d}"
+                      ",{\"buffer\":0,\"byteOffset\":%llu,\"byteLength\":%zu,\"target\":%d}",
+                      static_cast<unsigned long long>(t.position), 12 * n, kArrayBuffer,
+                      static_cast<unsigned long long>(t.normal), 12 * n, kArrayBuffer);
+        views += item;
+        a += 2, v += 2;
+      }
+      targets[i] += "]";
+    }
+    // Each list follows the last fixed item: drop the leading comma where it is the first.
+    if (firstAccessor == 0 && !accessors.empty()) accessors.erase(0, 1);
+    if (firstView == 0 && !views.empty()) views.erase(0, 1);
+  }
+  // Replaces the placeholder `mark` (with the comma before it when `text` is a list's rest) in the
+  // dumped JSON by `text`.
+  static void splice(std::string& dumped, const std::string& mark, const std::string& text) {
+    std::size_t at = dumped.find(mark);
+    std::size_t length = mark.size();
+    if (at == std::string::npos) throw Error("glTF export: placeholder " + mark + " lost");
+    if (!text.empty() && text[0] == ',' && at > 0 && dumped[at - 1] == ',') --at, ++length;  // "...,@x@" -> "...,{..}"
+    dumped.replace(at, length, text);
+  }
+
+  int bufferView(uint64_t offset, uint64_t length, int target) {
+    json v = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", length}};
+    if (target > 0) v["target"] = target;
+    doc_["bufferViews"].push_back(std::move(v));
+    return static_cast<int>(doc_["bufferViews"].size()) - 1;
+  }
+  int accessor(int view, uint64_t offset, std::size_t count, const char* type, const Floats* range) {
+    json a = {{"bufferView", view}, {"componentType", kFloat}, {"count", count}, {"type", type}};
+    if (offset) a["byteOffset"] = offset;
+    if (range) a["min"] = vec(range->lo), a["max"] = vec(range->hi);
+    doc_["accessors"].push_back(std::move(a));
+    return static_cast<int>(doc_["accessors"].size()) - 1;
+  }
+  int indexAccessor(const std::vector<uint32_t>& indices) {
+    const int view = bufferView(spill_.write(indices), 4 * indices.size(), kElementArrayBuffer);
+    json a = {{"bufferView", view}, {"componentType", kUnsignedInt}, {"count", indices.size()}, {"type", "SCALAR"}};
+    doc_["accessors"].push_back(std::move(a));
+    return static_cast<int>(doc_["accessors"].size()) - 1;
+  }
+  int material(const std::string& name, const Material& m, bool doubleSided) {
+    const double roughness = std::sqrt(2.0 / (std::max(m.shininess, 0.0) + 2.0));  // Phong exponent to roughness
+    json j = {{"name", name},
+              {"pbrMetallicRoughness",
+               {{"baseColorFactor", {m.color.x, m.color.y, m.color.z, m.alpha}},
+                {"metallicFactor", 0.0},
+                {"roughnessFactor", roughness}}}};
+    if (m.alpha < 1.0) j["alphaMode"] = "BLEND";
+    if (doubleSided) j["doubleSided"] = true;
+    doc_["materials"].push_back(std::move(j));
+    return static_cast<int>(doc_["materials"].size()) - 1;
+  }
+  void addNode(const std::string& name, json mesh) {
+    const int index = static_cast<int>(doc_["meshes"].size());
+    doc_["meshes"].push_back(std::move(mesh));
+    doc_["scenes"][0]["nodes"].push_back(doc_["nodes"].size());
+    doc_["nodes"].push_back({{"name", name}, {"mesh", index}});
+  }
+  // A still mesh (a collider): positions and indices now, its node at commit (after the bodies').
+  void addStill(const std::string& name, const std::vector<double>& xyz, const std::vector<uint32_t>& indices,
+                const Material& look) {
+    Floats p;
+    p.fill(xyz, nullptr);
+    const int view = bufferView(spill_.write(p.values), 4 * p.values.size(), kArrayBuffer);
+    const int position = accessor(view, 0, p.values.size() / 3, "VEC3", &p);
+    const int index = indexAccessor(indices);
+    json primitive = {{"attributes", {{"POSITION", position}}},
+                      {"indices", index},
+                      {"material", material(name, look, true)},
+                      {"mode", 4}};
+    stills_.push_back({{"name", name}, {"primitives", json::array({primitive})}});
+  }
+  // The visible colliders: triangle meshes as they are, a plane as a square around the bodies
+  // and the triangle colliders (its drawn half-size, at most twice their extent: a viewer frames
+  // the whole scene, and a 200 m ground would make the bodies specks).
+  void addColliders(const SceneDesc& scene, const World& world) {
+    Bounds all = boundsOf(world.positions());
+    for (std::size_t c = 0; c < scene.triangleColliders.size(); ++c) {
+      const TriMesh& m = scene.triangleColliders[c].mesh;
+      const Bounds bc = boundsOf(m.positions);
+      all = {componentMin(all.lo, bc.lo), componentMax(all.hi, bc.hi)};
+      if (c < scene.view.triangleColliders.size() && !scene.view.triangleColliders[c].visible) continue;
+      std::vector<double> xyz;
+      for (const Vec3& p : m.positions) xyz.insert(xyz.end(), {p.x, p.y, p.z});
+      std::vector<uint32_t> indices;
+      for (const Triangle& t : m.triangles) indices.insert(indices.end(), t.begin(), t.end());
+      const Material look = c < scene.view.triangleColliders.size() ? scene.view.triangleColliders[c].material
+                                                                    : Material{};
+      addStill("collider " + std::to_string(c), xyz, indices, look);
+    }
+    const Vec3 centre = (all.lo + all.hi) * 0.5;
+    const double reach = std::max(length(all.hi - all.lo), 1.0);
+    for (std::size_t p = 0; p < scene.planes.size(); ++p) {
+      const PlaneCollider& plane = scene.planes[p];
+      const SurfaceLook look = p < scene.view.planes.size() ? scene.view.planes[p] : SurfaceLook{};
+      if (!look.visible) continue;
+      const Vec3 n = normalized(plane.normal);
+      const Vec3 middle = centre - n * dot(centre - plane.point, n);
+      // Two directions in the plane.
+      const Vec3 helper = std::abs(n.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+      const Vec3 a = normalized(cross(helper, n)), b = cross(n, a);
+      const double h = std::min(look.extent, reach);
+      std::vector<double> xyz;
+      for (const auto& [s, t] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
+        const Vec3 q = middle + a * (s * h) + b * (t * h);
+        xyz.insert(xyz.end(), {q.x, q.y, q.z});
+      }
+      // Counter-clockwise seen from the normal's side.
+      const bool ccw = dot(cross(a, b), n) > 0.0;
+      const std::vector<uint32_t> indices = ccw ? std::vector<uint32_t>{0, 1, 2, 0, 2, 3}
+                                                : std::vector<uint32_t>{0, 2, 1, 0, 3, 2};
+      addStill("plane " + std::to_string(p), xyz, indices, look.material);
+    }
+  }
+
+  AtomicFile output_;
+  SpillFile spill_;
+  long frames_;
+  double frameTime_;
+  std::vector<ExportBody> bodies_;
+  std::vector<Primitive> primitives_;
+  std::vector<std::pair<std::vector<double>, std::vector<double>>> base_;  // per body: the first frame
+  std::vector<json> stills_;
+  json doc_;
+  Floats position_, normal_;
+  std::vector<double> xyz_, normals_;
+  long written_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<MotionExport> openGltf(const std::string& path, const SceneDesc& scene, const World& world,
+                                       long frames, double frameTime, const std::vector<std::string>& inputs) {
+  return std::make_unique<GltfExport>(path, scene, world, frames, frameTime, inputs);
+}
+
+}  // namespace springy

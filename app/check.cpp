@@ -113,6 +113,11 @@ std::vector<std::string> exportOutputs(const std::vector<std::string>& scenes, c
 
 int runCheck(const CheckOptions& options) {
   const std::string who = "springy " + options.command + ": ";  // messages' prefix
+  const auto recordError = [&](SceneRecord& record, const Error& e) {
+    std::cerr << who << e.what() << "\n";
+    record.status = SceneRecord::Status::Error;
+    record.message = e.what();
+  };
   std::vector<std::string> exports;
   if (!options.exportOutput.empty()) {
     exports = exportOutputs(options.scenes, options.exportOutput, options.exportFormat, options.exportOption);
@@ -140,9 +145,7 @@ int runCheck(const CheckOptions& options) {
     try {
       scene = loadSceneWith(path, options.overrides, true, &untried);
     } catch (const Error& e) {
-      std::cerr << who << e.what() << "\n";
-      record.status = SceneRecord::Status::Error;
-      record.message = e.what();
+      recordError(record, e);
       ++failures;
       continue;
     }
@@ -180,9 +183,7 @@ int runCheck(const CheckOptions& options) {
         }
         failure = runFrames(path, scene, world, monitor, rest, rows, exporter.get());
       } catch (const Error& e) {
-        std::cerr << who << e.what() << "\n";
-        record.status = SceneRecord::Status::Error;
-        record.message = e.what();
+        recordError(record, e);
         retryFailed = true;
         break;
       }
@@ -194,9 +195,7 @@ int runCheck(const CheckOptions& options) {
       try {
         if (!retryDefaultStep(path, scene, *failure, untried, threadCount(options.overrides), std::cerr)) break;
       } catch (const Error& e) {
-        std::cerr << who << e.what() << "\n";
-        record.status = SceneRecord::Status::Error;
-        record.message = e.what();
+        recordError(record, e);
         retryFailed = true;
         break;
       }
@@ -311,9 +310,7 @@ int runCheck(const CheckOptions& options) {
         exporter->commit();
         std::printf("  exported: %s\n", exporter->written().c_str());
       } catch (const Error& e) {
-        std::cerr << who << e.what() << "\n";
-        record.status = SceneRecord::Status::Error;
-        record.message = e.what();
+        recordError(record, e);
         ++failures;
         continue;
       }

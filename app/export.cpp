@@ -72,6 +72,14 @@ std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world)
   return bodies;
 }
 
+Vec3 linearColor(const Vec3& srgb) {
+  const auto channel = [](double c) {
+    c = std::clamp(c, 0.0, 1.0);
+    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+  };
+  return {channel(srgb.x), channel(srgb.y), channel(srgb.z)};
+}
+
 void drawnPositions(const ExportBody& body, const World& world, std::vector<double>& xyz) {
   const std::vector<Vec3>& x = world.positions();
   xyz.resize(3 * body.vertexCount());

@@ -45,6 +45,10 @@ struct ExportBody {
 // mesh's vertex k (the numbering of messages and pins), not the model's spatial order.
 std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world);
 
+// A scene colour (sRGB, as springy's renderer reads it) as the linear values glTF's base colour
+// and Blender's material colour mean (IEC 61966-2-1's transfer function).
+Vec3 linearColor(const Vec3& srgb);
+
 // The drawn positions of a body in `world` (x, y, z per drawn vertex).
 void drawnPositions(const ExportBody& body, const World& world, std::vector<double>& xyz);
 

@@ -364,9 +364,10 @@ class GltfExport final : public MotionExport {
   }
   int material(const std::string& name, const Material& m, bool doubleSided) {
     const double roughness = std::sqrt(2.0 / (std::max(m.shininess, 0.0) + 2.0));  // Phong exponent to roughness
+    const Vec3 c = linearColor(m.color);
     json j = {{"name", name},
               {"pbrMetallicRoughness",
-               {{"baseColorFactor", {m.color.x, m.color.y, m.color.z, m.alpha}},
+               {{"baseColorFactor", {c.x, c.y, c.z, m.alpha}},
                 {"metallicFactor", 0.0},
                 {"roughnessFactor", roughness}}}};
     if (m.alpha < 1.0) j["alphaMode"] = "BLEND";

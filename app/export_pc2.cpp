@@ -106,8 +106,8 @@ class PointCacheExport final : public MotionExport {
       }
       first += b.vertexCount();
       const Material& m = b.look;
-      std::snprintf(line, sizeof line, "Kd %.6g %.6g %.6g\nd %.6g\nNs %.6g\n", m.color.x, m.color.y, m.color.z,
-                    m.alpha, m.shininess);
+      const Vec3 kd = linearColor(m.color);  // Blender's importer takes Kd as the linear base colour
+      std::snprintf(line, sizeof line, "Kd %.6g %.6g %.6g\nd %.6g\nNs %.6g\n", kd.x, kd.y, kd.z, m.alpha, m.shininess);
       materials += "newmtl " + name + "\n" + line;
     }
     obj_->write(text);

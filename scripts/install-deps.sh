@@ -19,6 +19,7 @@ packages=(
   libx264-dev            # pulled in by libavcodec; listed so H.264 is never missing
   libgtest-dev libgmock-dev   # tests
   libbenchmark-dev       # benchmarks
+  time                   # benchmarks: GNU time, peak memory (scripts/bench-export.sh)
   libbullet-dev          # benchmarks: the peer comparison (Bullet soft bodies, bench/bullet)
   gnuplot-nox            # plots in the accuracy study
   munge slurmctld slurmd slurm-client  # sweeps: the Slurm test's single-node cluster (scripts/slurm-local.sh)

@@ -62,6 +62,8 @@ std::string followLinks(const std::string& path) {
 std::string errorText(int error) { return std::strerror(error); }
 
 bool interrupted() { return gSignal.load() != 0; }
+void requestInterrupt(int signal) { gSignal.store(signal); }
+void clearInterrupt() { gSignal.store(0); }
 int interruptSignal() { return gSignal.load(); }
 int interruptedExitStatus() {
   const int s = gSignal.load();

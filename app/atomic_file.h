@@ -82,6 +82,10 @@ bool sameFile(const std::string& a, const std::string& b);
 void installInterruptHandler();
 // True once one of the signals arrived.
 bool interrupted();
+// Sets the flag as the signal would (the Python module forwards a KeyboardInterrupt to a command
+// it runs on another thread), and clears it again once the command has stopped.
+void requestInterrupt(int signal);
+void clearInterrupt();
 // The first signal that arrived (0 if none).
 int interruptSignal();
 // The exit status of an interrupted run: 128 + the signal's number, as a shell reports a process

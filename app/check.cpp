@@ -225,20 +225,7 @@ int runCheck(const CheckOptions& options) {
                   static_cast<unsigned long long>(world.stepCount()), world.time(), wall, r.maxStrain, r.maxPenetration,
                   volumeMin, volumeEnd, r.last.kinetic, r.last.gravitational, r.last.elastic,
                   rest.atRest(info) ? "yes" : "no");
-      BodyResult& result = record.bodies.emplace_back();
-      result.name = info.name;
-      result.steps = world.stepCount();
-      result.time = world.time();
-      result.maxStrain = r.maxStrain;
-      result.maxPenetration = r.maxPenetration;
-      if (info.restVolume > 0.0) {
-        result.volumeMin = r.minVolumeRatio;
-        result.volumeEnd = r.last.volume / info.restVolume;
-      }
-      result.kinetic = r.last.kinetic;
-      result.gravitational = r.last.gravitational;
-      result.elastic = r.last.elastic;
-      result.atRest = rest.atRest(info);
+      record.bodies.push_back(bodyResult(world, monitor, rest, b));
       if (monitor.energyChecked()) {
         std::printf("  %-16s dissipated %.4g J of %.4g J (%.1f%%)\n", "", r.start.total() - r.last.total(),
                     r.energyScale, 100.0 * (r.start.total() - r.last.total()) / r.energyScale);
@@ -277,34 +264,7 @@ int runCheck(const CheckOptions& options) {
                     b + 1 < world.model().bodies.size() ? "," : "\n");
       }
     }
-    if (!failure && options.endVolume > 0.0) {
-      for (uint32_t b = 0; b < world.model().bodies.size() && !failure; ++b) {
-        const BodyInfo& info = world.model().bodies[b];
-        if (!(info.restVolume > 0.0)) continue;  // an open surface: no volume to keep
-        const double ratio = monitor.records()[b].last.volume / info.restVolume;
-        if (ratio < options.endVolume) {
-          char what[256];
-          std::snprintf(what, sizeof what, "body '%s' ends at %.1f%% of its rest volume, below the required %.1f%%",
-                        info.name.c_str(), 100.0 * ratio, 100.0 * options.endVolume);
-          failure = Failure{b, world.stepCount(), world.time(), what};
-        }
-      }
-    }
-    if (!failure && options.endAtRest) {
-      for (uint32_t b = 0; b < world.model().bodies.size() && !failure; ++b) {
-        const BodyInfo& info = world.model().bodies[b];
-        if (rest.atRest(info)) continue;
-        const auto [moved, worst] = rest.largestMove(info);
-        char what[400];
-        std::snprintf(what, sizeof what,
-                      "body '%s' is not at rest at the end: in the last %.0f s its vertex %u (of the mesh) moved "
-                      "over %.3g m, more than %.3g m (%.1f%% of its size); lengthen the scene or damp the body more "
-                      "(strut_decay, hinge_decay, [environment] drag)",
-                      info.name.c_str(), RestWatch::kWindow, info.meshVertex(worst), moved,
-                      RestWatch::kFraction * info.restSize, 100.0 * RestWatch::kFraction);
-        failure = Failure{b, world.stepCount(), world.time(), what};
-      }
-    }
+    if (!failure) failure = endCriteria(world, monitor, rest, options.endVolume, options.endAtRest);
     if (exporter && !failure) {
       try {
         exporter->commit();

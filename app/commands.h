@@ -44,6 +44,10 @@ struct RenderOverrides {
   bool noOverlay = false, noShadows = false, noAntialias = false;
 };
 
+// Applies them to the scene, with the same ranges as the scene's [render] keys (scene.cpp) and a
+// message naming the option: a value out of range is a springy::Error, never clamped.
+void applyRenderOverrides(SceneDesc& scene, const RenderOverrides& overrides);
+
 struct RenderOptions {
   std::vector<std::string> scenes;
   std::string output;  // a file for one scene, or a directory

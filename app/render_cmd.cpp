@@ -26,13 +26,7 @@
 #include "sim/trajectory.h"
 
 namespace springy {
-namespace {
 
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-
-// The command line's values get the same ranges as the scene's [render] keys (sim/scene.cpp), with
-// a message naming the option: a value out of range is an error, never clamped.
 void applyRenderOverrides(SceneDesc& scene, const RenderOverrides& o) {
   RenderDesc& r = scene.view.render;
   auto size = [](const char* option, int value, int most) {
@@ -61,6 +55,11 @@ void applyRenderOverrides(SceneDesc& scene, const RenderOverrides& o) {
   if (o.noShadows) r.shadows = false;
   if (o.noAntialias) r.antialias = false;
 }
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 bool endsWithMp4(const std::string& name) {
   if (name.size() < 4) return false;

@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -185,6 +186,56 @@ std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time) {
     }
   }
   return monitor.check(world);
+}
+
+BodyResult bodyResult(const World& world, const Monitor& monitor, const RestWatch& rest, uint32_t body) {
+  const BodyRecord& r = monitor.records()[body];
+  const BodyInfo& info = world.model().bodies[body];
+  BodyResult result;
+  result.name = info.name;
+  result.steps = world.stepCount();
+  result.time = world.time();
+  result.maxStrain = r.maxStrain;
+  result.maxPenetration = r.maxPenetration;
+  if (info.restVolume > 0.0) {  // an open surface (a cloth) encloses no volume
+    result.volumeMin = r.minVolumeRatio;
+    result.volumeEnd = r.last.volume / info.restVolume;
+  }
+  result.kinetic = r.last.kinetic;
+  result.gravitational = r.last.gravitational;
+  result.elastic = r.last.elastic;
+  result.atRest = rest.atRest(info);
+  return result;
+}
+
+std::optional<Failure> endCriteria(const World& world, const Monitor& monitor, const RestWatch& rest,
+                                   double endVolume, bool endAtRest) {
+  const std::vector<BodyInfo>& bodies = world.model().bodies;
+  for (uint32_t b = 0; b < bodies.size() && endVolume > 0.0; ++b) {
+    const BodyInfo& info = bodies[b];
+    if (!(info.restVolume > 0.0)) continue;  // an open surface: no volume to keep
+    const double ratio = monitor.records()[b].last.volume / info.restVolume;
+    if (ratio < endVolume) {
+      char what[256];
+      std::snprintf(what, sizeof what, "body '%s' ends at %.1f%% of its rest volume, below the required %.1f%%",
+                    info.name.c_str(), 100.0 * ratio, 100.0 * endVolume);
+      return Failure{b, world.stepCount(), world.time(), what, true};
+    }
+  }
+  for (uint32_t b = 0; b < bodies.size() && endAtRest; ++b) {
+    const BodyInfo& info = bodies[b];
+    if (rest.atRest(info)) continue;
+    const auto [moved, worst] = rest.largestMove(info);
+    char what[400];
+    std::snprintf(what, sizeof what,
+                  "body '%s' is not at rest at the end: in the last %.0f s its vertex %u (of the mesh) moved "
+                  "over %.3g m, more than %.3g m (%.1f%% of its size); lengthen the scene or damp the body more "
+                  "(strut_decay, hinge_decay, [environment] drag)",
+                  info.name.c_str(), RestWatch::kWindow, info.meshVertex(worst), moved,
+                  RestWatch::kFraction * info.restSize, 100.0 * RestWatch::kFraction);
+    return Failure{b, world.stepCount(), world.time(), what, true};
+  }
+  return std::nullopt;
 }
 
 }  // namespace springy

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "app/records.h"
 #include "scene/scene.h"
 #include "sim/monitor.h"
 
@@ -56,5 +57,15 @@ std::string substepsText(int count);
 // Returns the failure, if any. Stops early, with nothing to report, when interrupted() (a
 // signal): the caller sees the flag and stops.
 std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time);
+
+// One body's results after a run (check's table, --json, the Python module's sim.check()):
+// the monitor's extremes and last measures, and whether `rest` saw it at rest.
+BodyResult bodyResult(const World& world, const Monitor& monitor, const RestWatch& rest, uint32_t body);
+
+// check's criteria at the end of a run that passed the monitor: --end-volume (a body ending
+// below that fraction of its rest volume; 0: not checked) and --end-at-rest (every body at rest
+// over the frames `rest` watched). The first failure (Failure::criterion set), if any.
+std::optional<Failure> endCriteria(const World& world, const Monitor& monitor, const RestWatch& rest,
+                                   double endVolume, bool endAtRest);
 
 }  // namespace springy

@@ -25,6 +25,9 @@ packages=(
   munge slurmctld slurmd slurm-client  # sweeps: the Slurm test's single-node cluster (scripts/slurm-local.sh)
   parallel               # sweeps: the README's GNU parallel example, tested
   python3                # tests: a JUnit consumer (tests/junit_check.py, xml.etree)
+  python3-dev pybind11-dev python3-numpy  # the Python module (python/, docs/python.md)
+  python3-pytest python3-pil  # its tests (tests/python): pytest, PNGs read back
+  python3-matplotlib     # the example sweep's plot (examples/sweep_error_vs_time.py), run in the tests
   blender                # tests: export round trip, Blender reads the PC2 on the OBJ and the GLB (tests/blender_roundtrip.py)
   python3-vtk9 python3-numpy  # tests: export round trip, VTK (ParaView's readers) reads the PVD series
   nodejs                 # tests: the Khronos glTF validator (npm gltf-validator, tests/js)

@@ -86,6 +86,8 @@ class Monitor {
   // output frame is typical): each call costs one pass over the vertices and elements.
   std::optional<Failure> check(const World& world);
   const std::vector<BodyRecord>& records() const { return records_; }
+  // The volume limit from the next check on (MonitorLimits::minVolume; 0: not checked).
+  void setMinVolume(double fraction) { limits_.minVolume = fraction; }
   bool energyChecked() const { return checkEnergy_; }
 
  private:

@@ -163,8 +163,9 @@ World& World::operator=(World&&) noexcept = default;
 
 void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
   assert(x.size() == model_->vertexCount() && v.size() == model_->vertexCount());
-  x_ = std::move(x);
-  v_ = std::move(v);
+  // Copied into the state's own buffers: their addresses never change (the Python module's views).
+  std::copy(x.begin(), x.end(), x_.begin());
+  std::copy(v.begin(), v.end(), v_.begin());
   time_ = time;
   cachedAccelerationValid_ = false;
   staggered_ = false;

@@ -180,7 +180,8 @@ class World {
   // keeps. Returns false, leaving x and v alone, when the state is synchronized as it is.
   bool synchronizedState(std::vector<Vec3>& x, std::vector<Vec3>& v) const;
 
-  // Replaces the state (e.g. a test's initial condition). Sizes must match the model.
+  // Replaces the state (e.g. a test's initial condition), copying it into the buffers that
+  // positions() and velocities() return (their data never moves). Sizes must match the model.
   void setState(std::vector<Vec3> x, std::vector<Vec3> v, double time = 0.0);
 
  private:

@@ -1,0 +1,691 @@
+// springy's Python module, _springy (the package python/springy wraps it; docs/python.md).
+//
+// A Simulation is a scene loaded as `springy check` loads it, a World stepped frame by frame under
+// the stability monitor exactly as `check` steps it (the same advanceTo calls at the same frame
+// times, so the same bits), and its state seen from numpy without a copy. Long calls release the
+// GIL and look for Ctrl-C between frames. Everything that can be wrong with what Python hands in
+// (shapes, NaN, unknown keys, bad sizes) is a Python exception naming it; nothing here aborts.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <csignal>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <functional>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <sstream>
+#include <streambuf>
+#include <string>
+#include <thread>
+#include <type_traits>
+#include <vector>
+
+#include "app/atomic_file.h"
+#include "app/commands.h"
+#include "app/records.h"
+#include "app/runner.h"
+#include "app/scene_view.h"
+#include "render/error.h"
+#include "sim/diagnostics.h"
+#include "sim/error.h"
+#include "sim/limits.h"
+#include "sim/trajectory.h"
+
+namespace py = pybind11;
+
+namespace springy {
+namespace {
+
+static_assert(sizeof(Vec3) == 3 * sizeof(double) && std::is_standard_layout_v<Vec3>,
+              "the numpy views read the state as rows of three doubles");
+
+PyObject* gUnstable = nullptr;  // springy.Unstable (a RuntimeError)
+
+// Raises springy.Unstable for a failure of the monitor (or a check's criterion), with the body,
+// its name, the time, the step and the message as attributes; `record` is check's dict, if any.
+[[noreturn]] void raiseUnstable(const Failure& failure, const World& world, py::object record = py::none()) {
+  py::object type = py::reinterpret_borrow<py::object>(gUnstable);
+  py::object error = type(failure.message);
+  const std::vector<BodyInfo>& bodies = world.model().bodies;
+  error.attr("body") = failure.body;
+  error.attr("body_name") = failure.body < bodies.size() ? bodies[failure.body].name : std::string();
+  error.attr("time") = failure.time;
+  error.attr("step") = failure.step;
+  error.attr("message") = failure.message;
+  error.attr("criterion") = failure.criterion;
+  error.attr("record") = record;
+  PyErr_SetObject(gUnstable, error.ptr());
+  throw py::error_already_set();
+}
+
+// Raises KeyboardInterrupt (or what a Python signal handler raised) if a signal arrived.
+void checkSignals() {
+  if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+}
+
+// Keeps what is written to std::cerr while a command runs (and passes it on), so that a failed
+// command's Python exception carries its message, not only "see stderr".
+class CerrTee : public std::streambuf {
+ public:
+  CerrTee() : original_(std::cerr.rdbuf(this)) {}
+  ~CerrTee() override { std::cerr.rdbuf(original_); }
+  CerrTee(const CerrTee&) = delete;
+  CerrTee& operator=(const CerrTee&) = delete;
+  std::string text() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return kept_;
+  }
+
+ protected:
+  int overflow(int c) override {
+    if (c == traits_type::eof()) return traits_type::not_eof(c);
+    const char ch = static_cast<char>(c);
+    return xsputn(&ch, 1) == 1 ? c : traits_type::eof();
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (kept_.size() < kMaxKept) kept_.append(s, static_cast<std::size_t>(n));
+    return original_->sputn(s, n);
+  }
+  int sync() override { return original_->pubsync(); }
+
+ private:
+  static constexpr std::size_t kMaxKept = 1 << 16;
+  std::streambuf* original_;
+  std::mutex mutex_;
+  std::string kept_;
+};
+
+// Discards what is written to std::cerr while it lives (load(..., quiet=True)).
+class CerrSilence : public std::streambuf {
+ public:
+  CerrSilence() : original_(std::cerr.rdbuf(this)) {}
+  ~CerrSilence() override { std::cerr.rdbuf(original_); }
+  CerrSilence(const CerrSilence&) = delete;
+  CerrSilence& operator=(const CerrSilence&) = delete;
+
+ protected:
+  int overflow(int c) override { return traits_type::not_eof(c); }
+  std::streamsize xsputn(const char*, std::streamsize n) override { return n; }
+
+ private:
+  std::streambuf* original_;
+};
+
+// Runs a command (runRender, runFrames, runStudy) on another thread with the GIL released; a
+// Ctrl-C in Python sets the commands' interrupt flag (they stop within a frame and remove their
+// temporary files) and is raised once the command has returned. A non-zero status raises
+// springy.Error with what the command said on stderr.
+void runCommand(const std::string& what, const std::function<int()>& command) {
+  CerrTee tee;
+  int status = 0;
+  std::exception_ptr thrown;
+  bool done = false;
+  std::mutex mutex;
+  std::condition_variable finished;
+  std::thread worker([&] {
+    try {
+      status = command();
+    } catch (...) {
+      thrown = std::current_exception();
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    done = true;
+    finished.notify_all();
+  });
+  bool stopped = false;
+  for (;;) {
+    {
+      py::gil_scoped_release release;
+      std::unique_lock<std::mutex> lock(mutex);
+      finished.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; });
+      if (done) break;
+    }
+    if (!stopped && PyErr_CheckSignals() != 0) {
+      requestInterrupt(SIGINT);  // the Python error stays set until the worker returns
+      stopped = true;
+    }
+  }
+  worker.join();
+  if (stopped) {
+    clearInterrupt();
+    throw py::error_already_set();
+  }
+  if (thrown) std::rethrow_exception(thrown);
+  if (status != 0) {
+    std::string said = tee.text();
+    while (!said.empty() && said.back() == '\n') said.pop_back();
+    throw Error(what + " failed (exit status " + std::to_string(status) + ")" + (said.empty() ? "" : ": " + said));
+  }
+}
+
+// A zero-copy view of `count` rows of three doubles from `data`, kept alive by `owner`,
+// read-only: the state must change through the checked setters (Simulation::setState).
+py::array rowsView(const Vec3* data, std::size_t count, py::handle owner) {
+  py::array_t<double> view({static_cast<py::ssize_t>(count), py::ssize_t{3}},
+                           {static_cast<py::ssize_t>(sizeof(Vec3)), static_cast<py::ssize_t>(sizeof(double))},
+                           &data->x, owner);
+  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return view;
+}
+
+struct Range {
+  uint32_t first = 0, count = 0;
+};
+
+class Simulation {
+ public:
+  Simulation(const std::string& path, RunOverrides overrides, double minVolume)
+      : path_(path), overrides_(std::move(overrides)) {
+    limits_.minVolume = minVolume;
+    scene_ = loadSceneWith(path_, overrides_, true, &untried_);
+    frame_ = 1.0 / scene_.view.render.fps;
+    restart();
+  }
+
+  const World& world() const { return *world_; }
+  const SceneDesc& scene() const { return scene_; }
+  bool untried() const { return untried_; }
+
+  // The vertex range of body `body`, or every vertex for -1. Raises IndexError.
+  Range range(long body) const {
+    const std::vector<BodyInfo>& bodies = world_->model().bodies;
+    if (body == -1) return {0, static_cast<uint32_t>(world_->model().vertexCount())};
+    if (body < 0 || body >= static_cast<long>(bodies.size())) {
+      throw py::index_error("body " + std::to_string(body) + ": the scene has " + std::to_string(bodies.size()) +
+                            " bodies (indices from 0)");
+    }
+    const BodyInfo& info = bodies[static_cast<std::size_t>(body)];
+    return {info.firstVertex, info.vertexCount};
+  }
+
+  // Body `body` (not -1). Raises IndexError.
+  const BodyInfo& body(long index) const {
+    if (index == -1) range(-2);
+    range(index);
+    return world_->model().bodies[static_cast<std::size_t>(index)];
+  }
+
+  // Advances through every frame time up to `until`, then to `until` itself, as check does.
+  void run(double until) {
+    enter();
+    if (!std::isfinite(until)) throw py::value_error("run(until=...): the time must be finite");
+    if (until < world_->time() - 0.5 * world_->dt()) {
+      throw py::value_error("run(until=" + exactNumber(until) + "): the simulation is already at t = " +
+                            exactNumber(world_->time()) + " s (it never runs backwards)");
+    }
+    if (!world_->adaptive() && (until - world_->time()) / world_->dt() > kMaxSteps) {
+      throw py::value_error("run(until=" + exactNumber(until) + "): over " + exactNumber(kMaxSteps) +
+                            " steps of " + exactNumber(world_->dt()) + " s");
+    }
+    const double watchFrom = scene_.duration - RestWatch::kWindow;
+    for (;;) {
+      const double next = static_cast<double>(frames_ + 1) * frame_;
+      const bool onFrame = next <= until + 1e-9 * frame_;
+      const double target = onFrame ? next : until;
+      if (!onFrame && world_->reached(target)) break;
+      const std::optional<Failure> failure = released([&] { return advanceTo(*world_, *monitor_, target); });
+      if (onFrame) {
+        ++frames_;
+        if (world_->time() >= watchFrom - 1e-9) rest_.add(world_->positions());
+      }
+      if (failure) fail(*failure);
+      checkSignals();
+      if (!onFrame) break;
+    }
+  }
+
+  // n steps (the adaptive step: n accepted steps), then the monitor's check unless `check` is
+  // false (a caller that checks itself, or measures the call's cost).
+  void step(long n, bool check) {
+    enter();
+    if (n < 0) throw py::value_error("step(n=" + std::to_string(n) + "): n must be 0 or more");
+    constexpr long kChunk = 4096;  // steps between looks for Ctrl-C
+    for (long done = 0; done < n;) {
+      const long chunk = std::min(kChunk, n - done);
+      const std::optional<Failure> failure = released([&]() -> std::optional<Failure> {
+        for (long i = 0; i < chunk && world_->stepProblem().empty(); ++i) {
+          world_->stepToward(std::numeric_limits<double>::infinity());
+        }
+        if (world_->stepProblem().empty()) return std::nullopt;
+        std::optional<Failure> seen = monitor_->check(*world_);  // a blow-up it sees says more
+        return seen ? seen : Failure{0, world_->stepCount(), world_->time(), world_->stepProblem()};
+      });
+      if (failure) fail(*failure);
+      done += chunk;
+      if (done < n) checkSignals();
+    }
+    while (world_->reached(static_cast<double>(frames_ + 1) * frame_)) ++frames_;
+    if (check) {
+      if (std::optional<Failure> failure = monitor_->check(*world_)) fail(*failure);
+    }
+  }
+
+  // Runs on to the end of the scene (check's last frame) and returns check's record as JSON (the
+  // same fields as `check --json`). A failure of the monitor raises Unstable (with the record); a
+  // criterion (min_volume, end_volume, end_at_rest) that fails gives status "failed". When the
+  // scene gives no step and the run from the start fails, longer counts of substeps are tried as
+  // check tries them, and the run starts again with the count that passes.
+  std::string check(double minVolume, double endVolume, bool endAtRest) {
+    enter();
+    if (!(minVolume >= 0.0 && minVolume <= 1.0) || !(endVolume >= 0.0 && endVolume <= 1.0)) {
+      throw py::value_error("check(min_volume=..., end_volume=...): fractions of the rest volume, from 0 to 1");
+    }
+    limits_.minVolume = std::max(limits_.minVolume, minVolume);
+    monitor_->setMinVolume(limits_.minVolume);
+    const auto start = std::chrono::steady_clock::now();
+    const double end = static_cast<double>(frameCount(scene_.duration, frame_)) * frame_;
+    std::optional<Failure> failure;
+    for (;;) {
+      const bool fromStart = pristine_;
+      try {
+        if (!world_->reached(end)) run(end);  // a simulation run past the end is checked as it is
+        break;
+      } catch (py::error_already_set& e) {
+        if (!e.matches(gUnstable) || !failure_) throw;
+        const Failure first = *failure_;
+        if (first.criterion) {  // min_volume: the run failed the check, as check reports it
+          failure = first;
+          break;
+        }
+        if (!fromStart || !untried_) throw;
+        bool untried = true;
+        // Throws springy::Error when no count of substeps up to the limit passes.
+        if (!released([&] { return retryDefaultStep(path_, scene_, first, untried, threadCount(overrides_), std::cerr); })) {
+          throw;
+        }
+        untried_ = false;
+        restart();
+      }
+    }
+    if (!failure) failure = endCriteria(*world_, *monitor_, rest_, endVolume, endAtRest);
+    SceneRecord record = makeRecord();
+    record.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (failure) {
+      record.status = SceneRecord::Status::Failed;
+      record.failedBody = failure->body;
+      record.message = failure->message;
+    }
+    return toJson(record).dump();
+  }
+
+  SceneRecord makeRecord() const {
+    SceneRecord record;
+    record.path = path_;
+    record.scene = scene_.name;
+    record.integrator = std::string(integratorName(scene_.integrator));
+    record.dt = scene_.dt;
+    record.duration = scene_.duration;
+    record.substeps = scene_.substeps;
+    for (uint32_t b = 0; b < world_->model().bodies.size(); ++b) {
+      record.bodies.push_back(bodyResult(*world_, *monitor_, rest_, b));
+    }
+    return record;
+  }
+
+  // Replaces the positions or the velocities of a range (checked: shape and finiteness). The
+  // integrator's caches and the contact history start again, and so does the monitor's watch
+  // (energy put in by hand is no instability).
+  void setRows(py::handle value, long body, bool positions) {
+    enter();
+    const char* what = positions ? "positions" : "velocities";
+    const Range r = range(body);
+    const std::string name = (body == -1 ? std::string("sim.") : "body " + std::to_string(body) + ": ") + what;
+    py::array given = py::array::ensure(value);
+    if (!given) throw py::type_error(name + ": expected an array of numbers, not " + std::string(py::str(py::type::of(value).attr("__name__"))));
+    if (given.ndim() != 2 || given.shape(0) != r.count || given.shape(1) != 3) {
+      std::string shape = "(";
+      for (py::ssize_t i = 0; i < given.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(given.shape(i));
+      shape += given.ndim() == 1 ? ",)" : ")";
+      throw py::value_error(name + ": expected shape (" + std::to_string(r.count) + ", 3), got " + shape);
+    }
+    const char kind = given.dtype().kind();
+    if (kind != 'f' && kind != 'i' && kind != 'u') {
+      throw py::type_error(name + ": expected real numbers, got dtype " + std::string(py::str(given.dtype())));
+    }
+    const auto rows = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(given);
+    if (!rows) throw py::error_already_set();
+    const auto in = rows.unchecked<2>();
+    for (py::ssize_t i = 0; i < in.shape(0); ++i) {
+      for (py::ssize_t k = 0; k < 3; ++k) {
+        if (!std::isfinite(in(i, k))) {
+          throw py::value_error(name + "[" + std::to_string(i) + ", " + std::to_string(k) + "] is " +
+                                exactNumber(in(i, k)) + ": every value must be finite");
+        }
+      }
+    }
+    std::vector<Vec3> x = world_->positions(), v = world_->velocities();
+    std::vector<Vec3>& target = positions ? x : v;
+    for (uint32_t i = 0; i < r.count; ++i) {
+      target[r.first + i] = Vec3(in(i, 0), in(i, 1), in(i, 2));
+    }
+    world_->setState(std::move(x), std::move(v), world_->time());
+    monitor_.emplace(*world_, limits_);
+    failure_.reset();
+    pristine_ = false;
+  }
+
+  // The frame at this instant as `springy frames` draws it: HxWx3 uint8, rows top-down.
+  py::array render(std::optional<int> width, std::optional<int> height, bool overlay, bool shadows, bool antialias) {
+    enter();
+    RenderOverrides o;
+    o.width = width;
+    o.height = height;
+    o.noOverlay = !overlay;
+    o.noShadows = !shadows;
+    o.noAntialias = !antialias;
+    SceneDesc drawn = scene_;
+    applyRenderOverrides(drawn, o);
+    const RenderDesc& r = drawn.view.render;
+    if (!view_ || viewScene_.view.render.width != r.width || viewScene_.view.render.height != r.height ||
+        viewScene_.view.render.overlay != r.overlay || viewScene_.view.render.shadows != r.shadows ||
+        viewScene_.view.render.antialias != r.antialias || viewScene_.substeps != scene_.substeps) {
+      view_.reset();
+      viewScene_ = std::move(drawn);
+      view_ = std::make_unique<SceneView>(viewScene_, *world_, renderSettingsOf(viewScene_));
+    }
+    view_->draw(*world_);
+    const render::Image image = view_->renderer().readImage();
+    py::array_t<uint8_t> out({image.height, image.width, 3});
+    uint8_t* rgb = out.mutable_data();
+    const std::size_t pixels = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
+    for (std::size_t i = 0; i < pixels; ++i) {
+      for (std::size_t c = 0; c < 3; ++c) rgb[3 * i + c] = image.rgba[4 * i + c];
+    }
+    return out;
+  }
+
+ private:
+  // A new world at the scene's start (after load, and after check chose a longer step).
+  void restart() {
+    view_.reset();
+    world_.reset();
+    world_.emplace(makeWorld(scene_, overrides_));
+    monitor_.emplace(*world_, limits_);
+    rest_ = RestWatch{};
+    frames_ = 0;
+    failure_.reset();
+    pristine_ = true;
+  }
+
+  // Every call that reads or changes the state starts here. Stepping a simulation that failed
+  // raises its failure again: its state is what the monitor refused (set the state, or load the
+  // scene again). While one thread steps it (the GIL released), no other may touch it.
+  void enter() const {
+    if (busy_) throw py::value_error("the simulation is being stepped on another thread; wait for that call to return");
+    if (failure_) raiseUnstable(*failure_, *world_);
+  }
+
+  // Runs fn with the GIL released, the simulation marked busy.
+  template <class F>
+  std::invoke_result_t<F&> released(F&& fn) {
+    struct Busy {
+      bool& flag;
+      explicit Busy(bool& f) : flag(f) { flag = true; }
+      ~Busy() { flag = false; }
+    } busy(busy_);
+    py::gil_scoped_release release;
+    return fn();
+  }
+
+  [[noreturn]] void fail(const Failure& failure) {
+    failure_ = failure;
+    pristine_ = false;
+    Failure said = failure;
+    if (untried_ && !failure.criterion) {
+      said.message += " (the scene gives no step, and springy's default, " + substepsText(scene_.substeps) +
+                      ", was not tried: sim.check() tries longer ones from the start, or load the scene with "
+                      "substeps=" + std::to_string(2 * scene_.substeps) + ")";
+    }
+    raiseUnstable(said, *world_);
+  }
+
+  std::string path_;
+  RunOverrides overrides_;
+  SceneDesc scene_;
+  bool untried_ = false;  // the step is the advisor's default, not yet tried (check tries it)
+  double frame_ = 0.0;    // 1 / fps [s]
+  MonitorLimits limits_;
+  std::optional<World> world_;
+  std::optional<Monitor> monitor_;
+  RestWatch rest_;  // the frames of the scene's last second (check --end-at-rest)
+  long frames_ = 0;  // frame times reached
+  std::optional<Failure> failure_;
+  bool pristine_ = true;  // at the start, as loaded
+  bool busy_ = false;     // a call is stepping it with the GIL released
+  SceneDesc viewScene_;   // the scene as drawn (its [render] with the overrides)
+  std::unique_ptr<SceneView> view_;
+};
+
+// A view of one of the per-vertex vectors, a body's rows or (body -1) every vertex's.
+enum class Rows { Positions, Velocities, Rest };
+py::array bodyRows(py::object self, long body, Rows which) {
+  const Simulation& s = self.cast<const Simulation&>();
+  const Range r = s.range(body);
+  const World& w = s.world();
+  const std::vector<Vec3>& rows = which == Rows::Positions    ? w.positions()
+                                  : which == Rows::Velocities ? w.velocities()
+                                                              : w.model().restPosition;
+  return rowsView(rows.data() + r.first, r.count, self);
+}
+
+py::dict measuresDict(const BodyMeasures& m) {
+  py::dict d;
+  d["centroid"] = py::make_tuple(m.centroid.x, m.centroid.y, m.centroid.z);
+  d["momentum"] = py::make_tuple(m.momentum.x, m.momentum.y, m.momentum.z);
+  d["angular_momentum"] = py::make_tuple(m.angularMomentum.x, m.angularMomentum.y, m.angularMomentum.z);
+  d["kinetic"] = m.kinetic;
+  d["gravitational"] = m.gravitational;
+  d["elastic"] = m.elastic;
+  d["total"] = m.total();
+  d["volume"] = m.volume;
+  d["size"] = m.size;
+  d["max_strain"] = m.maxStrain;
+  d["penetration"] = m.penetration;
+  d["rms_speed"] = m.rmsSpeed;
+  d["finite"] = m.finite;
+  return d;
+}
+
+RunOverrides overridesOf(const std::vector<std::string>& sets, std::optional<std::string> integrator,
+                         std::optional<double> dt, std::optional<int> substeps, bool autoSubsteps,
+                         std::optional<double> duration, std::optional<double> tolerance,
+                         std::optional<unsigned> threads) {
+  RunOverrides o;
+  o.sets = sets;
+  o.integrator = std::move(integrator);
+  o.dt = dt;
+  o.substeps = substeps;
+  o.autoSubsteps = autoSubsteps;
+  o.duration = duration;
+  o.tolerance = tolerance;
+  o.threads = threads;
+  return o;
+}
+
+RenderOverrides renderOverridesOf(std::optional<int> width, std::optional<int> height, std::optional<double> fps,
+                                  bool overlay, bool shadows, bool antialias) {
+  RenderOverrides r;
+  r.width = width;
+  r.height = height;
+  r.fps = fps;
+  r.noOverlay = !overlay;
+  r.noShadows = !shadows;
+  r.noAntialias = !antialias;
+  return r;
+}
+
+}  // namespace
+}  // namespace springy
+
+PYBIND11_MODULE(_springy, m) {
+  using namespace springy;
+  m.doc() = "springy's C++ core (use the springy package: docs/python.md)";
+  py::register_exception<Error>(m, "Error", PyExc_ValueError);
+  py::register_exception<render::RenderError>(m, "RenderError", PyExc_RuntimeError);
+  gUnstable = PyErr_NewExceptionWithDoc(
+      "springy.Unstable",
+      "The stability monitor stopped the run (a blow-up, a body behind a collider, a limit given): "
+      "attributes body, body_name, time, step, message, criterion, record.",
+      PyExc_RuntimeError, nullptr);
+  m.add_object("Unstable", py::handle(gUnstable));
+
+  py::class_<Simulation>(m, "Simulation")
+      .def(py::init([](const std::string& path, const std::vector<std::string>& sets,
+                       std::optional<std::string> integrator, std::optional<double> dt, std::optional<int> substeps,
+                       bool autoSubsteps, std::optional<double> duration, std::optional<double> tolerance,
+                       std::optional<unsigned> threads, double minVolume, bool quiet) {
+             if (!(minVolume >= 0.0 && minVolume <= 1.0)) {
+               throw py::value_error("min_volume: a fraction of the rest volume, from 0 to 1");
+             }
+             py::gil_scoped_release release;  // the advisor may survey the step
+             std::optional<CerrSilence> silence;
+             if (quiet) silence.emplace();
+             return std::make_unique<Simulation>(
+                 path, overridesOf(sets, integrator, dt, substeps, autoSubsteps, duration, tolerance, threads),
+                 minVolume);
+           }),
+           py::arg("path"), py::arg("sets"), py::arg("integrator"), py::arg("dt"), py::arg("substeps"),
+           py::arg("auto_substeps"), py::arg("duration"), py::arg("tolerance"), py::arg("threads"),
+           py::arg("min_volume"), py::arg("quiet"))
+      .def("run", &Simulation::run, py::arg("until"))
+      .def("step", &Simulation::step, py::arg("n") = 1, py::arg("check") = true)
+      .def("check", &Simulation::check, py::arg("min_volume"), py::arg("end_volume"), py::arg("end_at_rest"))
+      .def("render", &Simulation::render, py::arg("width"), py::arg("height"), py::arg("overlay"),
+           py::arg("shadows"), py::arg("antialias"))
+      .def_property_readonly("time", [](const Simulation& s) { return s.world().time(); })
+      .def_property_readonly("dt", [](const Simulation& s) { return s.world().dt(); })
+      .def_property_readonly("steps", [](const Simulation& s) { return s.world().stepCount(); })
+      .def_property_readonly("force_evaluations", [](const Simulation& s) { return s.world().forceEvaluations(); })
+      .def_property_readonly("integrator",
+                             [](const Simulation& s) { return std::string(integratorName(s.world().integrator())); })
+      .def_property_readonly("substeps", [](const Simulation& s) { return s.scene().substeps; })
+      .def_property_readonly("duration", [](const Simulation& s) { return s.scene().duration; })
+      .def_property_readonly("fps", [](const Simulation& s) { return s.scene().view.render.fps; })
+      .def_property_readonly("threads", [](const Simulation& s) { return s.world().threads(); })
+      .def_property_readonly("name", [](const Simulation& s) { return s.scene().name; })
+      .def_property_readonly("step_untried", &Simulation::untried)
+      .def_property_readonly("state_hash", [](const Simulation& s) { return stateHash(s.world()); })
+      .def_property_readonly("body_count", [](const Simulation& s) { return s.world().model().bodies.size(); })
+      .def("body_info",
+           [](const Simulation& s, long body) {
+             const BodyInfo& b = s.body(body);
+             py::dict d;
+             d["name"] = b.name;
+             d["first_vertex"] = b.firstVertex;
+             d["vertex_count"] = b.vertexCount;
+             d["mass"] = b.mass;
+             d["rest_volume"] = b.restVolume;
+             d["rest_size"] = b.restSize;
+             d["open"] = b.open;
+             return d;
+           })
+      .def("positions", [](py::object self, long body) { return bodyRows(self, body, Rows::Positions); },
+           py::arg("body") = -1)
+      .def("velocities", [](py::object self, long body) { return bodyRows(self, body, Rows::Velocities); },
+           py::arg("body") = -1)
+      .def("rest_positions", [](py::object self, long body) { return bodyRows(self, body, Rows::Rest); },
+           py::arg("body") = -1)
+      .def(
+          "masses",
+          [](py::object self, long body) {
+            const Simulation& s = self.cast<const Simulation&>();
+            const Range r = s.range(body);
+            py::array_t<double> view({static_cast<py::ssize_t>(r.count)}, {static_cast<py::ssize_t>(sizeof(double))},
+                                     s.world().model().mass.data() + r.first, self);
+            py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+            return view;
+          },
+          py::arg("body") = -1)
+      .def("set_positions", [](Simulation& s, py::handle a, long body) { s.setRows(a, body, true); },
+           py::arg("value"), py::arg("body") = -1)
+      .def("set_velocities", [](Simulation& s, py::handle a, long body) { s.setRows(a, body, false); },
+           py::arg("value"), py::arg("body") = -1)
+      .def("faces",
+           [](const Simulation& s, long body) {
+             const Model& model = s.world().model();
+             const BodyInfo& b = s.body(body);
+             py::array_t<uint32_t> out({static_cast<py::ssize_t>(b.faceCount), py::ssize_t{3}});
+             auto o = out.mutable_unchecked<2>();
+             for (uint32_t f = 0; f < b.faceCount; ++f) {
+               for (int k = 0; k < 3; ++k) o(f, k) = model.faces[b.firstFace + f][static_cast<std::size_t>(k)] - b.firstVertex;
+             }
+             return out;
+           })
+      .def("mesh_order",
+           [](const Simulation& s, long body) {
+             const BodyInfo& b = s.body(body);
+             py::array_t<uint32_t> out(static_cast<py::ssize_t>(b.modelVertex.size()));
+             auto o = out.mutable_unchecked<1>();
+             for (std::size_t k = 0; k < b.modelVertex.size(); ++k) {
+               o(static_cast<py::ssize_t>(k)) = b.modelVertex[k] - b.firstVertex;
+             }
+             return out;
+           })
+      .def("measures", [](const Simulation& s, long body) {
+        s.body(body);
+        return measuresDict(measureBody(s.world(), static_cast<uint32_t>(body)));
+      });
+
+  m.def(
+      "render_video",
+      [](const std::vector<std::string>& scenes, const std::string& output, const std::vector<std::string>& sets,
+         std::optional<std::string> integrator, std::optional<double> dt, std::optional<int> substeps,
+         std::optional<double> duration, std::optional<unsigned> threads, std::optional<int> width,
+         std::optional<int> height, std::optional<double> fps, std::optional<int> crf, bool overlay, bool shadows,
+         bool antialias) {
+        RenderOptions o;
+        o.scenes = scenes;
+        o.output = output;
+        o.overrides = overridesOf(sets, integrator, dt, substeps, false, duration, std::nullopt, threads);
+        o.render = renderOverridesOf(width, height, fps, overlay, shadows, antialias);
+        o.render.crf = crf;
+        runCommand("springy render", [&] { return runRender(o); });
+      },
+      py::arg("scenes"), py::arg("output"), py::arg("sets"), py::arg("integrator"), py::arg("dt"),
+      py::arg("substeps"), py::arg("duration"), py::arg("threads"), py::arg("width"), py::arg("height"),
+      py::arg("fps"), py::arg("crf"), py::arg("overlay"), py::arg("shadows"), py::arg("antialias"));
+  m.def(
+      "frames",
+      [](const std::vector<std::string>& scenes, const std::string& output, const std::string& times, bool sheet,
+         bool sheetOnly, const std::vector<std::string>& sets, std::optional<std::string> integrator,
+         std::optional<double> dt, std::optional<int> substeps, std::optional<double> duration,
+         std::optional<unsigned> threads, std::optional<int> width, std::optional<int> height, bool overlay,
+         bool shadows, bool antialias) {
+        FramesOptions o;
+        o.scenes = scenes;
+        o.output = output;
+        o.times = times;
+        o.sheet = sheet;
+        o.sheetOnly = sheetOnly;
+        o.overrides = overridesOf(sets, integrator, dt, substeps, false, duration, std::nullopt, threads);
+        o.render = renderOverridesOf(width, height, std::nullopt, overlay, shadows, antialias);
+        runCommand("springy frames", [&] { return runFrames(o); });
+      },
+      py::arg("scenes"), py::arg("output"), py::arg("times"), py::arg("sheet"), py::arg("sheet_only"),
+      py::arg("sets"), py::arg("integrator"), py::arg("dt"), py::arg("substeps"), py::arg("duration"),
+      py::arg("threads"), py::arg("width"), py::arg("height"), py::arg("overlay"), py::arg("shadows"),
+      py::arg("antialias"));
+  m.def(
+      "study",
+      [](const std::string& kind, const std::string& output, const std::vector<std::string>& scenes, bool quick,
+         int repeats, double maxDuration) {
+        StudyOptions o;
+        o.kind = kind;
+        o.output = output;
+        o.scenes = scenes;
+        o.quick = quick;
+        o.repeats = repeats;
+        o.maxDuration = maxDuration;
+        runCommand("springy study " + kind, [&] { return runStudy(o); });
+      },
+      py::arg("kind"), py::arg("output"), py::arg("scenes"), py::arg("quick"), py::arg("repeats"),
+      py::arg("max_duration"));
+  m.def("integrators", [] { return integratorNames(); });
+}

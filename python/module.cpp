@@ -294,10 +294,14 @@ class Simulation {
           failure = first;
           break;
         }
-        if (!fromStart || !untried_) throw;
+        if (!fromStart || !untried_) {
+          attachRecord(e, first);
+          throw;
+        }
         bool untried = true;
         // Throws springy::Error when no count of substeps up to the limit passes.
         if (!released([&] { return retryDefaultStep(path_, scene_, first, untried, threadCount(overrides_), std::cerr); })) {
+          attachRecord(e, first);
           throw;
         }
         untried_ = false;
@@ -313,6 +317,15 @@ class Simulation {
       record.message = failure->message;
     }
     return toJson(record).dump();
+  }
+
+  // Sets the Unstable exception's `record` to check's record of the failed run.
+  void attachRecord(py::error_already_set& e, const Failure& failure) const {
+    SceneRecord record = makeRecord();
+    record.status = SceneRecord::Status::Failed;
+    record.failedBody = failure.body;
+    record.message = failure.message;
+    e.value().attr("record") = py::module_::import("json").attr("loads")(toJson(record).dump());
   }
 
   SceneRecord makeRecord() const {

@@ -191,7 +191,8 @@ class Simulation:
 
     def check(self, min_volume=0.0, end_volume=0.0, end_at_rest=False):
         """Runs to the scene's end and returns check --json's record of the run as a dict (path,
-        scene, status, integrator, dt, duration, substeps, wall, bodies: name, steps, time,
+        scene, status, failed_body, message, integrator, dt, substeps, duration, wall_s, bodies:
+        body, steps, time,
         max_strain, max_penetration, volume_min, volume_end, kinetic, gravitational, elastic,
         at_rest). A failed criterion gives status "failed"; an instability raises Unstable."""
         return _json.loads(self._core.check(float(min_volume), float(end_volume), bool(end_at_rest)))

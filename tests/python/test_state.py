@@ -184,6 +184,12 @@ def test_a_blow_up_raises_unstable_with_the_body_and_time():
     assert not e.criterion
     with pytest.raises(springy.Unstable):
         sim.step()  # the state is what the monitor refused
+    # check() raises it with check's record of the failed run.
+    with pytest.raises(springy.Unstable) as caught:
+        springy.load(SPHERE, integrator="explicit_euler", dt=1 / 30, substeps=1).check()
+    record = caught.value.record
+    assert record["status"] == "failed" and record["failed_body"] == "ball"
+    assert record["message"] == caught.value.message and record["bodies"][0]["body"] == "ball"
     # A criterion is a check's status, as check --json reports it.
     record = springy.load(SPHERE, duration=3).check(min_volume=0.99)
     assert record["status"] == "failed" and "volume" in record["message"]

@@ -23,6 +23,7 @@
 #include <streambuf>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <type_traits>
 #include <vector>
 
@@ -195,21 +196,19 @@ class Simulation {
 
   // The vertex range of body `body`, or every vertex for -1. Raises IndexError.
   Range range(long body) const {
-    const std::vector<BodyInfo>& bodies = world_->model().bodies;
     if (body == -1) return {0, static_cast<uint32_t>(world_->model().vertexCount())};
-    if (body < 0 || body >= static_cast<long>(bodies.size())) {
-      throw py::index_error("body " + std::to_string(body) + ": the scene has " + std::to_string(bodies.size()) +
-                            " bodies (indices from 0)");
-    }
-    const BodyInfo& info = bodies[static_cast<std::size_t>(body)];
+    const BodyInfo& info = this->body(body);
     return {info.firstVertex, info.vertexCount};
   }
 
   // Body `body` (not -1). Raises IndexError.
   const BodyInfo& body(long index) const {
-    if (index == -1) range(-2);
-    range(index);
-    return world_->model().bodies[static_cast<std::size_t>(index)];
+    const std::vector<BodyInfo>& bodies = world_->model().bodies;
+    if (index < 0 || index >= static_cast<long>(bodies.size())) {
+      throw py::index_error("body " + std::to_string(index) + ": the scene has " + std::to_string(bodies.size()) +
+                            " bodies (indices from 0)");
+    }
+    return bodies[static_cast<std::size_t>(index)];
   }
 
   // Advances through every frame time up to `until`, then to `until` itself, as check does.
@@ -393,15 +392,15 @@ class Simulation {
     o.noOverlay = !overlay;
     o.noShadows = !shadows;
     o.noAntialias = !antialias;
-    SceneDesc drawn = scene_;
-    applyRenderOverrides(drawn, o);
-    const RenderDesc& r = drawn.view.render;
-    if (!view_ || viewScene_.view.render.width != r.width || viewScene_.view.render.height != r.height ||
-        viewScene_.view.render.overlay != r.overlay || viewScene_.view.render.shadows != r.shadows ||
-        viewScene_.view.render.antialias != r.antialias || viewScene_.substeps != scene_.substeps) {
+    // The view (its GL context, meshes and scene copy) is made again only when what it draws changes.
+    const auto key = std::make_tuple(width, height, overlay, shadows, antialias, scene_.substeps);
+    if (!view_ || key != viewKey_) {
+      SceneDesc drawn = scene_;
+      applyRenderOverrides(drawn, o);  // throws for a bad size before the old view is dropped
       view_.reset();
       viewScene_ = std::move(drawn);
       view_ = std::make_unique<SceneView>(viewScene_, *world_, renderSettingsOf(viewScene_));
+      viewKey_ = key;
     }
     view_->draw(*world_);
     const render::Image image = view_->renderer().readImage();
@@ -474,6 +473,7 @@ class Simulation {
   bool busy_ = false;     // a call is stepping it with the GIL released
   SceneDesc viewScene_;   // the scene as drawn (its [render] with the overrides)
   std::unique_ptr<SceneView> view_;
+  std::tuple<std::optional<int>, std::optional<int>, bool, bool, bool, int> viewKey_;  // render()'s arguments
 };
 
 // A view of one of the per-vertex vectors, a body's rows or (body -1) every vertex's.

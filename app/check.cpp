@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -25,13 +26,14 @@ namespace springy {
 namespace {
 
 void writeTraceHeader(std::ostream& out) {
-  out << "scene,time,body,centroid_x,centroid_y,centroid_z,volume,kinetic,gravitational,elastic,total,max_strain\n";
+  out << "scene,time,body,centroid_x,centroid_y,centroid_z,volume,kinetic,gravitational,elastic,total,max_strain,contacts\n";
 }
 
-void writeTraceRow(std::ostream& out, const std::string& scene, double t, const std::string& body, const BodyMeasures& m) {
+void writeTraceRow(std::ostream& out, const std::string& scene, double t, const std::string& body, const BodyMeasures& m,
+                   uint32_t contacts) {
   char numbers[256];
-  std::snprintf(numbers, sizeof numbers, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g\n", m.centroid.x, m.centroid.y,
-                m.centroid.z, m.volume, m.kinetic, m.gravitational, m.elastic, m.total(), m.maxStrain);
+  std::snprintf(numbers, sizeof numbers, ",%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.6g,%u\n", m.centroid.x, m.centroid.y,
+                m.centroid.z, m.volume, m.kinetic, m.gravitational, m.elastic, m.total(), m.maxStrain, contacts);
   char time[32];
   std::snprintf(time, sizeof time, ",%.6f,", t);
   out << csvField(scene) << time << csvField(body) << numbers;
@@ -64,7 +66,8 @@ void printRunHeader(const std::string& path, const SceneDesc& scene, const World
 // given, receives a trace row per frame and body. Returns the first failure; stops early, with
 // none, when a signal arrives (the caller asks interrupted()).
 std::optional<Failure> runFrames(const std::string& path, const SceneDesc& scene, World& world, Monitor& monitor,
-                                 RestWatch& rest, std::ostream* rows, MotionExport* exporter) {
+                                 RestWatch& rest, std::ostream* rows, MotionExport* exporter,
+                                 const std::function<void(long, const World&, const Monitor&)>& onFrame) {
   const double frame = 1.0 / scene.view.render.fps;
   const long frames = frameCount(scene.duration, frame);
   const double watchFrom = scene.duration - RestWatch::kWindow;
@@ -77,9 +80,11 @@ std::optional<Failure> runFrames(const std::string& path, const SceneDesc& scene
     progress.update(k, std::to_string(world.stepCount()) + " steps");
     if (world.time() >= watchFrom - 1e-9) rest.add(world.positions());
     if (exporter && !failure) exporter->frame(world, monitor);
+    if (onFrame) onFrame(k, world, monitor);
     if (rows) {
       for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
-        writeTraceRow(*rows, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last);
+        writeTraceRow(*rows, scene.name, world.time(), world.model().bodies[b].name, monitor.records()[b].last,
+                      touchingVertices(world, b));
       }
     }
   }
@@ -119,7 +124,10 @@ int runCheck(const CheckOptions& options) {
     record.message = e.what();
   };
   std::vector<std::string> exports;
-  if (!options.exportOutput.empty()) {
+  if (options.replay) {
+    if (options.scenes.size() != 1 || options.exportOutput.empty()) throw Error("a replay is written for one scene");
+    exports = {options.exportOutput};
+  } else if (!options.exportOutput.empty()) {
     exports = exportOutputs(options.scenes, options.exportOutput, options.exportFormat, options.exportOption);
   }
   std::unique_ptr<AtomicFile> traceFile;
@@ -177,11 +185,11 @@ int runCheck(const CheckOptions& options) {
         exporter.reset();  // a failed try's output is removed before the next is opened
         if (!exports.empty()) {
           const double frame = 1.0 / scene.view.render.fps;
-          exporter = openExport(exports[sceneIndex], scene, world, frameCount(scene.duration, frame), frame,
-                                options.scenes);
+          exporter = (options.replay ? openReplay : openExport)(exports[sceneIndex], scene, world,
+                                                                frameCount(scene.duration, frame), frame, options.scenes);
           exporter->frame(world, monitor);
         }
-        failure = runFrames(path, scene, world, monitor, rest, rows, exporter.get());
+        failure = runFrames(path, scene, world, monitor, rest, rows, exporter.get(), options.onFrame);
       } catch (const Error& e) {
         recordError(record, e);
         retryFailed = true;
@@ -265,7 +273,9 @@ int runCheck(const CheckOptions& options) {
       }
     }
     if (!failure) failure = endCriteria(world, monitor, rest, options.endVolume, options.endAtRest);
-    if (exporter && !failure) {
+    // A run that failed only a criterion (--end-at-rest, --end-volume) is a valid motion: kept
+    // where asked (a report shows it beside the failure).
+    if (exporter && (!failure || (failure->criterion && options.exportOnCriterionFailure))) {
       try {
         exporter->commit();
         std::printf("  exported: %s\n", exporter->written().c_str());

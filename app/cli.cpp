@@ -172,6 +172,30 @@ CommandLine::CommandLine() {
   framesCmd->add_flag("--sheet-only", frames.sheetOnly, "Write only the contact sheet");
   addRunOverrides(framesCmd, frames.overrides);
   addRenderOverrides(framesCmd, frames.render);
+
+  reportCmd = app.add_subcommand(
+      "report", "Write HTML pages of scenes' runs (video, 3D replay, contact sheet, plots, check's table), a sweep "
+                "and a study, to open in a browser (docs/report.md)");
+  reportCmd->add_option("scenes", report.scenes, "Scene files (.toml)")->check(CLI::ExistingFile);
+  reportCmd->add_option("-o,--output", report.output, "The report's folder (replaced if springy wrote it before)")
+      ->required();
+  addRunOverrides(reportCmd, report.overrides);
+  reportCmd->add_option("--width", reportWidth, "Video width in pixels (even)")->check(CLI::Range(16, 7680));
+  reportCmd->add_option("--height", reportHeight, "Video height in pixels (even)")->check(CLI::Range(16, 4320));
+  reportCmd->add_option("--fps", reportFps, "Frames per second (video, plots, replay)")->check(CLI::Range(1.0, 240.0));
+  reportCmd->add_option("--min-volume", report.minVolume, "check's criterion: volume never below this fraction of rest")
+      ->check(kFraction);
+  reportCmd->add_option("--end-volume", report.endVolume, "check's criterion: volume at the end at least this fraction")
+      ->check(kFraction);
+  reportCmd->add_flag("--end-at-rest", report.endAtRest, "check's criterion: every body at rest over the last second");
+  reportCmd->add_option("--sweep", report.sweep, "A sweep's folder (its table.json): a page with a row per task")
+      ->check(CLI::ExistingDirectory);
+  reportCmd->add_option("--x", report.x, "The sweep's plot: the key across (default: the first that varies)");
+  reportCmd->add_option("--y", report.y,
+                        "The sweep's plot: the figure up: volume_min (default), volume_end, max_strain, "
+                        "max_penetration, steps, kinetic or elastic");
+  reportCmd->add_option("--study", report.study, "A study's folder (springy study -o DIR): its pages and plots")
+      ->check(CLI::ExistingDirectory);
 #endif
 
   sweepCmd = app.add_subcommand("sweep", "Run a scene (or several) over a grid or list of settings (docs/sweeps.md)");
@@ -234,6 +258,21 @@ int CommandLine::dispatch() {
   if (renderCmd->parsed() || framesCmd->parsed()) {
     const std::filesystem::path helper = std::filesystem::path(selfExecutable()).parent_path() / SPRINGY_RENDER_HELPER;
     return runChild(helper.string(), args);
+  }
+#endif
+#if defined(SPRINGY_HAVE_RENDER) || defined(SPRINGY_RENDER_HELPER)
+  if (reportCmd->parsed()) {
+    // The video's size and rate as scene keys: check's run, the video and the sheet all take them.
+    if (reportWidth) report.overrides.sets.push_back("render.width=" + std::to_string(*reportWidth));
+    if (reportHeight) report.overrides.sets.push_back("render.height=" + std::to_string(*reportHeight));
+    if (reportFps) {
+      char fps[64];
+      std::snprintf(fps, sizeof fps, "render.fps=%.17g", *reportFps);
+      report.overrides.sets.push_back(fps);
+    }
+    report.command = {"springy"};
+    report.command.insert(report.command.end(), args.begin(), args.end());
+    return runReport(report);
   }
 #endif
   if (sweepCmd->parsed()) return runSweep(sweep);

@@ -31,6 +31,9 @@ struct CommandLine {
   SweepOptions sweep;
   RunTaskOptions runTask;
   GatherOptions gather;
+  ReportOptions report;
+  std::optional<int> reportWidth, reportHeight;
+  std::optional<double> reportFps;
   CLI::App* checkCmd = nullptr;
   CLI::App* exportCmd = nullptr;
   CLI::App* suggestCmd = nullptr;
@@ -41,6 +44,7 @@ struct CommandLine {
   CLI::App* sweepCmd = nullptr;
   CLI::App* runTaskCmd = nullptr;
   CLI::App* gatherCmd = nullptr;
+  CLI::App* reportCmd = nullptr;  // null without the renderer
 };
 
 // Parses `args` (without the program's name) into `cli`. Throws CLI::ParseError.

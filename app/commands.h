@@ -1,6 +1,7 @@
 // springy app: the subcommands.
 #pragma once
 
+#include <functional>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -27,6 +28,12 @@ struct CheckOptions {
   std::string exportFormat = "glb";  // for a directory: pc2, glb or pvd
   std::string command = "check";          // the command run, for messages ("export")
   std::string exportOption = "--export";  // the option that named exportOutput, for messages ("-o" in `export`)
+  // For `report`: exportOutput (one scene) is the page's 3D replay (openReplay), and it is kept
+  // when the run failed only a criterion; onFrame, when set, sees every frame after it was
+  // checked (k = 1, 2, ...; k = 1 again when the default step's try failed and the run restarts).
+  bool replay = false;
+  bool exportOnCriterionFailure = false;
+  std::function<void(long k, const World& world, const Monitor& monitor)> onFrame;
 };
 int runCheck(const CheckOptions& options);
 
@@ -103,6 +110,20 @@ struct StudyOptions {
   double maxDuration = 0;  // contact: study at most this much of each scene [s] (0: all)
 };
 int runStudy(const StudyOptions& options);
+
+// `springy report` (app/report.cpp, docs/report.md): HTML pages of scenes' runs, a sweep, a study.
+struct ReportOptions {
+  std::vector<std::string> scenes;
+  std::string output;       // the report's folder
+  RunOverrides overrides;   // for every scene's run (check's, the video's, the sheet's)
+  double minVolume = 0.0, endVolume = 0.0;  // check's criteria, shown in the pages
+  bool endAtRest = false;
+  std::string sweep;        // a sweep's folder (its table.json), empty for none
+  std::string x, y;         // the sweep's plot: the key across (default: the first swept) and the figure
+  std::string study;        // a study's folder (its .md pages and plots), empty for none
+  std::vector<std::string> command;  // the command line, shown on the overview
+};
+int runReport(const ReportOptions& options);
 
 // `springy sweep SPEC.toml` (app/sweep.cpp, docs/sweeps.md).
 struct SweepOptions {

@@ -39,6 +39,51 @@ const char* exportExtension(ExportFormat format) {
   return "";
 }
 
+// The visible colliders: triangle meshes as they are, a plane as a square around the bodies
+// and the triangle colliders (its drawn half-size, at most twice their extent: a viewer frames
+// the whole scene, and a 200 m ground would make the bodies specks).
+std::vector<StillMesh> colliderMeshes(const SceneDesc& scene, const World& world) {
+  std::vector<StillMesh> out;
+  Bounds all = boundsOf(world.positions());
+  for (std::size_t c = 0; c < scene.triangleColliders.size(); ++c) {
+    const TriMesh& m = scene.triangleColliders[c].mesh;
+    const Bounds bc = boundsOf(m.positions);
+    all = {componentMin(all.lo, bc.lo), componentMax(all.hi, bc.hi)};
+    if (c < scene.view.triangleColliders.size() && !scene.view.triangleColliders[c].visible) continue;
+    std::vector<double> xyz;
+    for (const Vec3& p : m.positions) xyz.insert(xyz.end(), {p.x, p.y, p.z});
+    std::vector<uint32_t> indices;
+    for (const Triangle& t : m.triangles) indices.insert(indices.end(), t.begin(), t.end());
+    const Material look = c < scene.view.triangleColliders.size() ? scene.view.triangleColliders[c].material
+                                                                  : Material{};
+    out.push_back({"collider " + std::to_string(c), std::move(xyz), std::move(indices), look});
+  }
+  const Vec3 centre = (all.lo + all.hi) * 0.5;
+  const double reach = std::max(length(all.hi - all.lo), 1.0);
+  for (std::size_t p = 0; p < scene.planes.size(); ++p) {
+    const PlaneCollider& plane = scene.planes[p];
+    const SurfaceLook look = p < scene.view.planes.size() ? scene.view.planes[p] : SurfaceLook{};
+    if (!look.visible) continue;
+    const Vec3 n = normalized(plane.normal);
+    const Vec3 middle = centre - n * dot(centre - plane.point, n);
+    // Two directions in the plane.
+    const Vec3 helper = std::abs(n.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+    const Vec3 a = normalized(cross(helper, n)), b = cross(n, a);
+    const double h = std::min(look.extent, reach);
+    std::vector<double> xyz;
+    for (const auto& [s, t] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
+      const Vec3 q = middle + a * (s * h) + b * (t * h);
+      xyz.insert(xyz.end(), {q.x, q.y, q.z});
+    }
+    // Counter-clockwise seen from the normal's side.
+    const bool ccw = dot(cross(a, b), n) > 0.0;
+    const std::vector<uint32_t> indices = ccw ? std::vector<uint32_t>{0, 1, 2, 0, 2, 3}
+                                              : std::vector<uint32_t>{0, 2, 1, 0, 3, 2};
+    out.push_back({"plane " + std::to_string(p), std::move(xyz), indices, look.material});
+  }
+  return out;
+}
+
 std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world) {
   const Model& model = world.model();
   std::vector<ExportBody> bodies;

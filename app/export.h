@@ -45,6 +45,18 @@ struct ExportBody {
 // mesh's vertex k (the numbering of messages and pins), not the model's spatial order.
 std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world);
 
+// A still mesh of the scene (a collider) as exported: x, y, z per vertex, three indices per triangle.
+struct StillMesh {
+  std::string name;  // "collider K", "plane K"
+  std::vector<double> xyz;
+  std::vector<uint32_t> indices;
+  Material look;
+};
+// The visible colliders: triangle meshes as they are, a plane as a square around the bodies and
+// the triangle colliders (its drawn half-size, at most twice their extent: a viewer frames the
+// whole scene, and a 200 m ground would make the bodies specks).
+std::vector<StillMesh> colliderMeshes(const SceneDesc& scene, const World& world);
+
 // A scene colour (sRGB, as springy's renderer reads it) as the linear values glTF's base colour
 // and Blender's material colour mean (IEC 61966-2-1's transfer function).
 Vec3 linearColor(const Vec3& srgb);
@@ -87,6 +99,9 @@ std::unique_ptr<MotionExport> openPointCache(const std::string& path, const Scen
                                              long frames, double frameTime, const std::vector<std::string>& inputs);
 std::unique_ptr<MotionExport> openGltf(const std::string& path, const SceneDesc& scene, const World& world,
                                        long frames, double frameTime, const std::vector<std::string>& inputs);
+// The report's 3D replay (app/export_replay.cpp): a script for a page, not a format of `export`.
+std::unique_ptr<MotionExport> openReplay(const std::string& path, const SceneDesc& scene, const World& world,
+                                         long frames, double frameTime, const std::vector<std::string>& inputs);
 std::unique_ptr<MotionExport> openVtkSeries(const std::string& path, const SceneDesc& scene, const World& world,
                                             long frames, double frameTime, const std::vector<std::string>& inputs);
 

@@ -24,6 +24,7 @@
 
 #include "app/atomic_file.h"
 #include "app/export.h"
+#include "app/spill_file.h"
 #include "sim/error.h"
 
 namespace springy {
@@ -33,62 +34,6 @@ using nlohmann::json;
 
 constexpr int kFloat = 5126, kUnsignedInt = 5125;
 constexpr int kArrayBuffer = 34962, kElementArrayBuffer = 34963;
-
-// An anonymous file beside the output for the binary chunk (removed by the system when closed,
-// whatever happens).
-class SpillFile {
- public:
-  SpillFile(const std::string& target) : target_(target) {
-    const std::size_t slash = target.rfind('/');
-    std::string name = (slash == std::string::npos ? std::string() : target.substr(0, slash + 1)) + ".springy-glb-XXXXXX";
-    fd_ = ::mkostemp(name.data(), O_CLOEXEC);
-    if (fd_ < 0) throw Error(target + ": cannot write here: " + errorText(errno));
-    ::unlink(name.c_str());
-  }
-  ~SpillFile() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  SpillFile(const SpillFile&) = delete;
-  SpillFile& operator=(const SpillFile&) = delete;
-
-  // Appends; returns the offset the bytes start at.
-  uint64_t write(const void* data, std::size_t size) {
-    const uint64_t at = size_;
-    const auto* p = static_cast<const uint8_t*>(data);
-    while (size > 0) {
-      const ssize_t n = ::write(fd_, p, size);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) fail(n < 0 ? errno : EIO);
-      p += n, size -= static_cast<std::size_t>(n), size_ += static_cast<uint64_t>(n);
-    }
-    return at;
-  }
-  template <typename T>
-  uint64_t write(const std::vector<T>& values) {
-    return write(values.data(), values.size() * sizeof(T));
-  }
-  uint64_t size() const { return size_; }
-  // Copies everything written into `out`.
-  void copyTo(AtomicFile& out) {
-    std::vector<uint8_t> chunk(1 << 20);
-    for (uint64_t at = 0; at < size_;) {
-      const ssize_t n = ::pread(fd_, chunk.data(), static_cast<std::size_t>(std::min<uint64_t>(chunk.size(), size_ - at)),
-                                static_cast<off_t>(at));
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) fail(n < 0 ? errno : EIO);
-      out.write({chunk.data(), static_cast<std::size_t>(n)});
-      at += static_cast<uint64_t>(n);
-    }
-  }
-
- private:
-  [[noreturn]] void fail(int error) {
-    throw Error(target_ + ": writing failed: " + errorText(error) + " (" + target_ + " left as it was)");
-  }
-  std::string target_;
-  int fd_ = -1;
-  uint64_t size_ = 0;
-};
 
 // Smooth vertex normals: each face's area-weighted normal summed at its corners, made unit
 // (a vertex of no face, or whose faces cancel, gets +y).
@@ -395,47 +340,9 @@ class GltfExport final : public MotionExport {
                       {"mode", 4}};
     stills_.push_back({{"name", name}, {"primitives", json::array({primitive})}});
   }
-  // The visible colliders: triangle meshes as they are, a plane as a square around the bodies
-  // and the triangle colliders (its drawn half-size, at most twice their extent: a viewer frames
-  // the whole scene, and a 200 m ground would make the bodies specks).
+  // The visible colliders (colliderMeshes).
   void addColliders(const SceneDesc& scene, const World& world) {
-    Bounds all = boundsOf(world.positions());
-    for (std::size_t c = 0; c < scene.triangleColliders.size(); ++c) {
-      const TriMesh& m = scene.triangleColliders[c].mesh;
-      const Bounds bc = boundsOf(m.positions);
-      all = {componentMin(all.lo, bc.lo), componentMax(all.hi, bc.hi)};
-      if (c < scene.view.triangleColliders.size() && !scene.view.triangleColliders[c].visible) continue;
-      std::vector<double> xyz;
-      for (const Vec3& p : m.positions) xyz.insert(xyz.end(), {p.x, p.y, p.z});
-      std::vector<uint32_t> indices;
-      for (const Triangle& t : m.triangles) indices.insert(indices.end(), t.begin(), t.end());
-      const Material look = c < scene.view.triangleColliders.size() ? scene.view.triangleColliders[c].material
-                                                                    : Material{};
-      addStill("collider " + std::to_string(c), xyz, indices, look);
-    }
-    const Vec3 centre = (all.lo + all.hi) * 0.5;
-    const double reach = std::max(length(all.hi - all.lo), 1.0);
-    for (std::size_t p = 0; p < scene.planes.size(); ++p) {
-      const PlaneCollider& plane = scene.planes[p];
-      const SurfaceLook look = p < scene.view.planes.size() ? scene.view.planes[p] : SurfaceLook{};
-      if (!look.visible) continue;
-      const Vec3 n = normalized(plane.normal);
-      const Vec3 middle = centre - n * dot(centre - plane.point, n);
-      // Two directions in the plane.
-      const Vec3 helper = std::abs(n.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
-      const Vec3 a = normalized(cross(helper, n)), b = cross(n, a);
-      const double h = std::min(look.extent, reach);
-      std::vector<double> xyz;
-      for (const auto& [s, t] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
-        const Vec3 q = middle + a * (s * h) + b * (t * h);
-        xyz.insert(xyz.end(), {q.x, q.y, q.z});
-      }
-      // Counter-clockwise seen from the normal's side.
-      const bool ccw = dot(cross(a, b), n) > 0.0;
-      const std::vector<uint32_t> indices = ccw ? std::vector<uint32_t>{0, 1, 2, 0, 2, 3}
-                                                : std::vector<uint32_t>{0, 2, 1, 0, 3, 2};
-      addStill("plane " + std::to_string(p), xyz, indices, look.material);
-    }
+    for (const StillMesh& m : colliderMeshes(scene, world)) addStill(m.name, m.xyz, m.indices, m.look);
   }
 
   AtomicFile output_;

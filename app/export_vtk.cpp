@@ -8,47 +8,24 @@
 // The folder is built under a temporary name beside it and renamed when the run is complete; a
 // folder of an earlier export is replaced then, one that springy did not make (no marker file
 // in it) is refused before the run.
-#include <dirent.h>
 #include <fcntl.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 
 #include "app/atomic_file.h"
 #include "app/export.h"
+#include "app/folder.h"
 #include "sim/error.h"
 
 namespace springy {
 namespace {
 
 constexpr const char* kMarker = ".springy-series";  // in every folder springy writes
-
-// Removes a folder springy made and what is in it (files only: springy puts no folders there).
-void removeFolder(const std::string& path) {
-  if (DIR* d = ::opendir(path.c_str())) {
-    while (const dirent* e = ::readdir(d)) {
-      if (std::strcmp(e->d_name, ".") == 0 || std::strcmp(e->d_name, "..") == 0) continue;
-      ::unlink((path + "/" + e->d_name).c_str());
-    }
-    ::closedir(d);
-  }
-  ::rmdir(path.c_str());
-}
-
-// A folder removed with what is in it unless released (a run that fails, or a signal, leaves none).
-struct TemporaryFolder {
-  std::string path;
-  TemporaryFolder() = default;
-  TemporaryFolder(const TemporaryFolder&) = delete;
-  TemporaryFolder& operator=(const TemporaryFolder&) = delete;
-  ~TemporaryFolder() {
-    if (!path.empty()) removeFolder(path);
-  }
-};
 
 std::string number(double v) {
   char text[32];
@@ -104,18 +81,10 @@ class VtkSeriesExport final : public MotionExport {
     const fs::path target(path);
     folder_ = fs::path(target).replace_extension("").string();
     folderName_ = fs::path(folder_).filename().string();
-    struct stat st {};
-    if (::lstat(folder_.c_str(), &st) == 0) {
-      if (!S_ISDIR(st.st_mode) || ::access((folder_ + "/" + kMarker).c_str(), F_OK) != 0) {
-        throw Error(path + ": its frames go to the folder " + folder_ +
-                    ", which exists and was not written by springy; move it or export under another name");
-      }
-    }
-    std::string temporary = (fs::path(folder_).parent_path() / ("." + folderName_ + ".tmp-XXXXXX")).string();
-    if (!::mkdtemp(temporary.data())) throw Error(folder_ + ": cannot create a folder here: " + errorText(errno));
-    temporary_.path = temporary;
-    writeFile(temporary_.path + "/" + kMarker, "springy export: this folder is replaced by the next export of " +
-                                              fs::path(path).filename().string() + "\n");
+    output_ = std::make_unique<OutputFolder>(
+        folder_, kMarker,
+        "springy export: this folder is replaced by the next export of " + fs::path(path).filename().string() + "\n",
+        path + ": its frames go to the folder " + folder_);
     for (const ExportBody& b : bodies_) {
       Cells& c = cells_.emplace_back();
       std::vector<int64_t> connectivity, offsets;
@@ -170,7 +139,7 @@ class VtkSeriesExport final : public MotionExport {
       xml += arrayXml("UInt8", "types", 1, base + cells.types);
       xml += "</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_";
       std::string tail = "\n</AppendedData>\n</VTKFile>\n";
-      const std::string file = temporary_.path + "/" + fileName(i, written_);
+      const std::string file = output_->temporaryPath() + "/" + fileName(i, written_);
       writeFile(file, xml, data.bytes, cells.data.bytes, tail);
     }
     times_.push_back(world.time());
@@ -194,24 +163,8 @@ class VtkSeriesExport final : public MotionExport {
     }
     xml += "</Collection>\n</VTKFile>\n";
     collection_.write(xml);
-    // The frames reach the disk before the folder gets its name.
-    const int dir = ::open(temporary_.path.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dir < 0 || ::syncfs(dir) != 0) fail("writing failed", errno);
-    ::close(dir);
-    std::string old;
-    struct stat st {};
-    if (::lstat(folder_.c_str(), &st) == 0) {
-      old = temporary_.path + ".old";
-      if (std::rename(folder_.c_str(), old.c_str()) != 0) fail("cannot move the earlier export's folder aside", errno);
-    }
-    if (std::rename(temporary_.path.c_str(), folder_.c_str()) != 0) {
-      const int error = errno;
-      if (!old.empty()) std::rename(old.c_str(), folder_.c_str());
-      fail("cannot rename the finished folder into place", error);
-    }
-    temporary_.path.clear();
+    output_->commit();
     collection_.commit();
-    if (!old.empty()) removeFolder(old);
   }
 
   std::string written() const override { return collection_.target() + " with the folder " + folder_; }
@@ -259,7 +212,7 @@ class VtkSeriesExport final : public MotionExport {
   std::vector<ExportBody> bodies_;
   std::vector<Cells> cells_;
   std::string folder_, folderName_;
-  TemporaryFolder temporary_;
+  std::unique_ptr<OutputFolder> output_;
   std::vector<double> xyz_;
   VertexFields fields_;
   long written_ = 0;

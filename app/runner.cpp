@@ -238,4 +238,11 @@ std::optional<Failure> endCriteria(const World& world, const Monitor& monitor, c
   return std::nullopt;
 }
 
+uint32_t touchingVertices(const World& world, uint32_t body) {
+  const BodyInfo& info = world.model().bodies[body];
+  uint32_t count = 0;
+  for (uint32_t v = info.firstVertex; v < info.firstVertex + info.vertexCount; ++v) count += world.touching(v) ? 1 : 0;
+  return count;
+}
+
 }  // namespace springy

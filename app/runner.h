@@ -62,6 +62,9 @@ std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time);
 // the monitor's extremes and last measures, and whether `rest` saw it at rest.
 BodyResult bodyResult(const World& world, const Monitor& monitor, const RestWatch& rest, uint32_t body);
 
+// How many of the body's vertices touch a collider or a body now (World::touching).
+uint32_t touchingVertices(const World& world, uint32_t body);
+
 // check's criteria at the end of a run that passed the monitor: --end-volume (a body ending
 // below that fraction of its rest volume; 0: not checked) and --end-at-rest (every body at rest
 // over the frames `rest` watched). The first failure (Failure::criterion set), if any.

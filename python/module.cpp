@@ -643,7 +643,9 @@ PYBIND11_MODULE(_springy, m) {
            })
       .def("measures", [](const Simulation& s, long body) {
         s.body(body);
-        return measuresDict(measureBody(s.world(), static_cast<uint32_t>(body)));
+        py::dict d = measuresDict(measureBody(s.world(), static_cast<uint32_t>(body)));
+        d["contacts"] = touchingVertices(s.world(), static_cast<uint32_t>(body));
+        return d;
       });
 
   m.def(

@@ -30,7 +30,10 @@ packages=(
   python3-matplotlib     # the example sweep's plot (examples/sweep_error_vs_time.py), run in the tests
   blender                # tests: export round trip, Blender reads the PC2 on the OBJ and the GLB (tests/blender_roundtrip.py)
   python3-vtk9 python3-numpy  # tests: export round trip, VTK (ParaView's readers) reads the PVD series
-  nodejs                 # tests: the Khronos glTF validator (npm gltf-validator, tests/js)
+  nodejs                 # report: its 3D viewer bundled (npm three, esbuild: app/report); tests: the Khronos glTF validator (npm gltf-validator, tests/js)
+  zlib1g-dev             # report: the 3D replay's frames, deflated
+  libcmark-gfm-dev libcmark-gfm-extensions-dev  # report: a study's Markdown pages as HTML
+  chromium               # tests: the report opened in headless Chromium (tests/js/report_browser.js)
   clang libclang-rt-14-dev llvm  # fuzzing (scripts/fuzz.sh): clang 14, libFuzzer and sanitizer runtimes, llvm-symbolizer
 )
 SUDO=""
@@ -50,9 +53,12 @@ if ! command -v npm >/dev/null; then
   $SUDO apt-get update -qq
   $SUDO apt-get install -y -qq --no-install-recommends npm
 fi
-# The glTF validator, at the version package-lock.json pins; fetched again only when the lock changed.
-js="$(dirname "$0")/../tests/js"
-if ! cmp -s "$js/package-lock.json" "$js/node_modules/.springy-lock" 2>/dev/null; then
-  npm ci --prefix "$js" --no-audit --no-fund --loglevel=error
-  cp "$js/package-lock.json" "$js/node_modules/.springy-lock"
-fi
+# npm packages, at the versions each package-lock.json pins, fetched again only when the lock
+# changed: three.js and esbuild for the report's viewer (app/report), built into springy; the glTF
+# validator and playwright-core (which drives Debian's chromium) for the tests (tests/js).
+for js in "$(dirname "$0")/../app/report" "$(dirname "$0")/../tests/js"; do
+  if ! cmp -s "$js/package-lock.json" "$js/node_modules/.springy-lock" 2>/dev/null; then
+    npm ci --prefix "$js" --no-audit --no-fund --loglevel=error
+    cp "$js/package-lock.json" "$js/node_modules/.springy-lock"
+  fi
+done

@@ -123,7 +123,8 @@ class Body:
         return self._sim._core.mesh_order(self.index)
 
     def measures(self):
-        """The body now: centroid, momentum, energies [J], volume, size, max_strain, ..."""
+        """The body now: centroid, momentum, energies [J], volume, size, max_strain, contacts (its
+        vertices touching a collider or a body), ..."""
         return self._sim._core.measures(self.index)
 
 

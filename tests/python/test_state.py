@@ -20,7 +20,7 @@ def trace_row(sim, body):
     cx, cy, cz = m["centroid"]
     numbers = "".join(f",{v:.9g}" for v in (cx, cy, cz, m["volume"], m["kinetic"], m["gravitational"],
                                             m["elastic"], m["total"]))
-    return f"{sim.name},{sim.time:.6f},{body.name}{numbers},{m['max_strain']:.6g}"
+    return f"{sim.name},{sim.time:.6f},{body.name}{numbers},{m['max_strain']:.6g},{m['contacts']}"
 
 
 def test_a_drop_matches_check_to_the_bit(tmp_path, springy_cli):

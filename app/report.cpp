@@ -1,0 +1,752 @@
+// `springy report`: one folder of HTML pages per set of runs (docs/report.md).
+//
+//   DIR/index.html            the overview: a row per scene (status, step, figures, contact sheet),
+//                             and links to the sweep's and the study's pages
+//   DIR/SCENE/index.html      a scene's page: its video, 3D replay, contact sheet, plots over time
+//                             (energy, volume, strain, contacts), check's table, its files
+//   DIR/sweep/index.html      a sweep's table (a row per task) and a plot of a figure against a key;
+//                             DIR/sweep/task-NNNN.html per task
+//   DIR/study/*.html          a study's Markdown pages with their plots
+//   DIR/assets/               the pages' style and the 3D viewer (three.js, bundled)
+// A page uses only files in the folder (no network), so the folder can be zipped, mailed, or
+// opened from a USB stick. Each scene is run once by check (its trace, its records, the replay),
+// then drawn by springy-render (the video and the contact sheet: the same simulation, which is
+// deterministic). The folder is built under a temporary name and renamed when complete
+// (OutputFolder): a failure or a signal leaves the earlier report as it was.
+#include <cmark-gfm-core-extensions.h>
+#include <cmark-gfm.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+#include <cstring>
+
+#include "app/atomic_file.h"
+#include "app/child.h"
+#include "app/commands.h"
+#include "app/folder.h"
+#include "app/runner.h"
+#include "sim/error.h"
+
+// The pages' style and the bundled viewer, embedded by app/report_assets.cpp.
+extern "C" const char springy_report_viewer[], springy_report_viewer_end[];
+extern "C" const char springy_report_style[], springy_report_style_end[];
+
+namespace springy {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kMarker = ".springy-report";
+constexpr std::size_t kMaxBodiesDrawnApart = 8;  // more bodies: the plots show the extremes over them
+
+std::string escaped(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&#39;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// A path inside a page's href or src: each byte that is not safe in a URL as %XX.
+std::string urlPath(const std::string& path) {
+  std::string out;
+  for (unsigned char c : path) {
+    if (std::isalnum(c) || std::strchr("-._~/", c)) {
+      out += static_cast<char>(c);
+    } else {
+      char hex[4];
+      std::snprintf(hex, sizeof hex, "%%%02X", c);
+      out += hex;
+    }
+  }
+  return out;
+}
+
+std::string number(double v, const char* format = "%.4g") {
+  if (!std::isfinite(v)) return "-";
+  char text[48];
+  std::snprintf(text, sizeof text, format, v);
+  return text;
+}
+
+std::string exact(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", v);
+  return text;
+}
+
+void writeText(const fs::path& path, const std::string& text) { writeFileAtomically(path.string(), text); }
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path.string() + ": cannot read it");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void copyFile(const fs::path& from, const fs::path& to) { writeText(to, readText(from)); }
+
+std::string pageHead(const std::string& title, const std::string& assets) {
+  return "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+         "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>" +
+         escaped(title) + "</title>\n<link rel=\"stylesheet\" href=\"" + assets + "report.css\">\n</head>\n<body>\n";
+}
+
+std::string badge(bool ok, const std::string& text) {
+  return std::string("<span class=\"") + (ok ? "ok" : "bad") + "\">" + escaped(text) + "</span>";
+}
+
+// The command line of springy-render for the run's overrides (the same run as check's).
+std::vector<std::string> overrideArgs(const RunOverrides& o) {
+  std::vector<std::string> args;
+  if (o.integrator) args.insert(args.end(), {"--integrator", *o.integrator});
+  if (o.dt) args.insert(args.end(), {"--dt", exact(*o.dt)});
+  if (o.tolerance) args.insert(args.end(), {"--tolerance", exact(*o.tolerance)});
+  if (o.autoSubsteps) {
+    args.insert(args.end(), {"--substeps", "auto"});
+  } else if (o.substeps) {
+    args.insert(args.end(), {"--substeps", std::to_string(*o.substeps)});
+  }
+  if (o.duration) args.insert(args.end(), {"--duration", exact(*o.duration)});
+  if (o.threads) args.insert(args.end(), {"--threads", std::to_string(*o.threads)});
+  for (const std::string& s : o.sets) args.insert(args.end(), {"--set", s});
+  return args;
+}
+
+void runRenderer(const std::vector<std::string>& args, const std::string& what) {
+  const fs::path helper = fs::path(selfExecutable()).parent_path() / "springy-render";
+  const int status = runChild(helper.string(), args);
+  if (interrupted()) return;
+  if (status != 0) throw Error(what + " failed (springy-render exited with " + std::to_string(status) + ")");
+}
+
+void runGnuplot(const fs::path& script) {
+  const std::string command = "cd '" + script.parent_path().string() + "' && gnuplot '" + script.filename().string() + "'";
+  if (std::system(command.c_str()) != 0) throw Error("gnuplot failed on " + script.string());
+}
+
+// A gnuplot string literal (single quotes; a quote doubled).
+std::string gnuplotText(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out + "'";
+}
+
+const char* kSvgTerminal =
+    "set terminal svg size 640,340 dynamic font 'DejaVu Sans,11' background rgb 'white'\n"
+    "set termoption noenhanced\nset grid lc rgb '#dddddd'\nset key top right\nset border lc rgb '#555555'\n";
+
+// What the scene's page plots, one sample per frame.
+struct Series {
+  struct Body {
+    std::string name;
+    bool closed = false;
+    double restVolume = 0.0;
+  };
+  std::vector<Body> bodies;
+  std::size_t vertices = 0;
+  std::vector<double> time;
+  std::vector<double> kinetic, gravitational, elastic;  // summed over the bodies [J]
+  std::vector<std::vector<double>> volume, strain, contacts;  // [frame][body]
+
+  void clear() { *this = Series{}; }
+  void add(const World& world, const Monitor& monitor) {
+    const auto& info = world.model().bodies;
+    if (bodies.empty()) {
+      for (const BodyInfo& b : info) bodies.push_back({b.name, b.restVolume > 0.0, b.restVolume});
+      vertices = world.model().vertexCount();
+    }
+    time.push_back(world.time());
+    double k = 0, g = 0, e = 0;
+    std::vector<double> vol, str, con;
+    for (uint32_t b = 0; b < info.size(); ++b) {
+      const BodyMeasures& m = monitor.records()[b].last;
+      k += m.kinetic, g += m.gravitational, e += m.elastic;
+      vol.push_back(bodies[b].closed ? m.volume / bodies[b].restVolume : std::numeric_limits<double>::quiet_NaN());
+      str.push_back(m.maxStrain);
+      con.push_back(touchingVertices(world, b));
+    }
+    kinetic.push_back(k), gravitational.push_back(g), elastic.push_back(e);
+    volume.push_back(std::move(vol)), strain.push_back(std::move(str)), contacts.push_back(std::move(con));
+  }
+};
+
+// series.dat and plots.gp beside the page, and the four SVGs gnuplot draws from them.
+void writePlots(const fs::path& dir, const Series& s) {
+  const std::size_t n = s.bodies.size();
+  const bool apart = n <= kMaxBodiesDrawnApart;
+  std::string dat = "# springy report: one row per frame. time [s], kinetic, gravitational, elastic, total [J]";
+  if (apart) {
+    dat += "; then per body: volume / rest, largest strain, vertices in contact\n";
+  } else {
+    dat += "; then over the " + std::to_string(n) +
+           " bodies: the lowest volume / rest, the largest strain, vertices in contact in all\n";
+  }
+  for (std::size_t f = 0; f < s.time.size(); ++f) {
+    dat += exact(s.time[f]) + " " + exact(s.kinetic[f]) + " " + exact(s.gravitational[f]) + " " + exact(s.elastic[f]) +
+           " " + exact(s.kinetic[f] + s.gravitational[f] + s.elastic[f]);
+    const auto field = [](double v) { return std::isfinite(v) ? " " + exact(v) : std::string(" NaN"); };
+    if (apart) {
+      for (std::size_t b = 0; b < n; ++b) {
+        dat += field(s.volume[f][b]) + field(s.strain[f][b]) + field(s.contacts[f][b]);
+      }
+    } else {
+      double lowest = std::numeric_limits<double>::infinity(), largest = 0.0, touching = 0.0;
+      for (std::size_t b = 0; b < n; ++b) {
+        if (std::isfinite(s.volume[f][b])) lowest = std::min(lowest, s.volume[f][b]);
+        largest = std::max(largest, s.strain[f][b]);
+        touching += s.contacts[f][b];
+      }
+      dat += field(std::isinf(lowest) ? std::numeric_limits<double>::quiet_NaN() : lowest) + field(largest) +
+             field(touching);
+    }
+    dat += "\n";
+  }
+  writeText(dir / "series.dat", dat);
+
+  const bool anyClosed = std::any_of(s.bodies.begin(), s.bodies.end(), [](const Series::Body& b) { return b.closed; });
+  std::string gp = std::string("# springy report: the plots of this page (gnuplot plots.gp)\n") + kSvgTerminal +
+                   "set xlabel 'time [s]'\nset datafile missing 'NaN'\n";
+  gp += "set output 'energy.svg'\nset title 'Energy (all bodies)'\nset ylabel 'energy [J]'\n"
+        "plot 'series.dat' using 1:2 with lines lw 2 title 'kinetic', '' using 1:3 with lines lw 2 title "
+        "'gravitational', '' using 1:4 with lines lw 2 title 'elastic', '' using 1:5 with lines lw 2 lc rgb "
+        "'black' title 'total'\n";
+  const auto perBody = [&](const char* file, const char* title, const char* ylabel, int column, bool closedOnly,
+                           const std::string& aggregate) {
+    gp += std::string("set output '") + file + "'\nset title '" + title + "'\nset ylabel '" + ylabel + "'\nplot ";
+    if (!apart) {
+      gp += "'series.dat' using 1:" + std::to_string(6 + column) + " with lines lw 2 title " + gnuplotText(aggregate) +
+            "\n";
+      return;
+    }
+    bool first = true;
+    for (std::size_t b = 0; b < n; ++b) {
+      if (closedOnly && !s.bodies[b].closed) continue;
+      gp += std::string(first ? "" : ", ") + "'series.dat' using 1:" + std::to_string(6 + 3 * b + column) +
+            " with lines lw 2 title " + gnuplotText(s.bodies[b].name);
+      first = false;
+    }
+    gp += "\n";
+  };
+  if (anyClosed) {
+    perBody("volume.svg", "Volume", "volume / rest", 0, true, "lowest of " + std::to_string(n) + " bodies");
+  }
+  perBody("strain.svg", "Largest strain", "|l - l0| / l0", 1, false, "largest of " + std::to_string(n) + " bodies");
+  perBody("contacts.svg", "Contacts", "vertices touching", 2, false, "all " + std::to_string(n) + " bodies");
+  writeText(dir / "plots.gp", gp);
+  runGnuplot(dir / "plots.gp");
+}
+
+struct SceneResult {
+  std::string path, stem;
+  SceneRecord record;
+  bool motion = false;  // the replay, the video and the sheet were written (the motion is valid)
+  std::size_t vertices = 0;
+};
+
+std::string checkTable(const SceneRecord& r, const ReportOptions& o) {
+  std::string t = "<table class=\"check\">\n<tr><th>body</th><th>steps</th><th>max strain</th><th>max pen. [m]</th>"
+                  "<th>volume min</th><th>volume end</th><th>kinetic [J]</th><th>elastic [J]</th><th>at rest</th>"
+                  "<th>result</th></tr>\n";
+  for (std::size_t b = 0; b < r.bodies.size(); ++b) {
+    const BodyResult& body = r.bodies[b];
+    const bool failedHere = r.status != SceneRecord::Status::Ok && r.failedBody && *r.failedBody == b;
+    const auto volume = [](const std::optional<double>& v, double least) {
+      if (!v) return std::string("<td>-</td>");
+      const std::string cls = least <= 0.0 ? "" : *v >= least ? " class=\"ok\"" : " class=\"bad\"";
+      return "<td" + cls + ">" + number(*v, std::abs(*v) < 1e3 ? "%.3f" : "%.3g") + "</td>";
+    };
+    const std::string rest = o.endAtRest ? (body.atRest ? " class=\"ok\"" : " class=\"bad\"") : "";
+    t += "<tr><td>" + escaped(body.name) + "</td><td>" + std::to_string(body.steps) + "</td><td>" +
+         number(body.maxStrain) + "</td><td>" + number(body.maxPenetration, "%.2e") + "</td>" +
+         volume(body.volumeMin, o.minVolume) + volume(body.volumeEnd, o.endVolume) + "<td>" + number(body.kinetic) +
+         "</td><td>" + number(body.elastic) + "</td><td" + rest + ">" + (body.atRest ? "yes" : "no") + "</td>" +
+         (failedHere ? "<td class=\"bad\">failed</td>" : r.status == SceneRecord::Status::Ok ? "<td class=\"ok\">ok</td>"
+                                                                                              : "<td>-</td>") +
+         "</tr>\n";
+  }
+  return t + "</table>\n";
+}
+
+std::string criteriaText(const ReportOptions& o) {
+  std::string c = "stable (no NaN, no body past 10&times; its size, no energy gained from nothing, no vertex behind "
+                  "a plane)";
+  if (o.minVolume > 0) c += "; volume &ge; " + number(o.minVolume) + " of rest throughout";
+  if (o.endVolume > 0) c += "; volume &ge; " + number(o.endVolume) + " of rest at the end";
+  if (o.endAtRest) c += "; at rest over the last second";
+  return c;
+}
+
+std::string stepText(const SceneRecord& r) {
+  if (r.dt <= 0) return "-";
+  return number(r.dt, "%.4g") + " s" + (r.substeps > 1 ? " in " + std::to_string(r.substeps) + " substeps (" +
+                                                            number(r.dt / r.substeps, "%.4g") + " s each)"
+                                                      : std::string());
+}
+
+void writeScenePage(const fs::path& dir, const SceneResult& s, const ReportOptions& o, const Series& series) {
+  const SceneRecord& r = s.record;
+  const bool ok = r.status == SceneRecord::Status::Ok;
+  std::string page = pageHead("springy report: " + r.scene, "../assets/");
+  page += "<header><h1>" + escaped(r.scene) + "</h1><p>" + escaped(s.path) +
+          " &middot; <a href=\"../index.html\">all of the report</a></p></header>\n<main>\n";
+  page += "<section><h2>Result " + badge(ok, statusName(r.status)) + "</h2>\n";
+  if (!r.message.empty()) page += "<div class=\"message\">" + escaped(r.message) + "</div>\n";
+  page += "<dl class=\"facts\"><dt>integrator</dt><dd>" + escaped(r.integrator.empty() ? "-" : r.integrator) +
+          "</dd><dt>step</dt><dd>" + stepText(r) + "</dd><dt>simulated</dt><dd>" + number(r.duration) + " s" +
+          (ok || series.time.empty() || series.time.back() >= r.duration - 1e-6 ? std::string() : ", stopped at " + number(series.time.back()) + " s") +
+          "</dd><dt>bodies</dt><dd>" + std::to_string(r.bodies.size()) + " (" + std::to_string(s.vertices) +
+          " vertices)</dd>";
+  if (!r.bodies.empty()) page += "<dt>steps</dt><dd>" + std::to_string(r.bodies[0].steps) + "</dd>";
+  page += "<dt>wall time</dt><dd>" + number(r.wall, "%.3g") + " s (check's run)</dd><dt>criteria</dt><dd>" +
+          criteriaText(o) + "</dd></dl>\n</section>\n";
+  if (s.motion) {
+    page += "<section class=\"grid\">\n<div><h2>Video</h2>\n<video id=\"video\" controls muted playsinline "
+            "preload=\"auto\" src=\"" +
+            urlPath(s.stem + ".mp4") +
+            "\"></video></div>\n<div class=\"springy-replay\" data-video=\"video\"><h2>3D replay</h2>\n"
+            "<div class=\"springy-replay-canvas\"></div>\n<div class=\"controls\"><button type=\"button\" "
+            "class=\"springy-replay-play\">Play</button><input type=\"range\" class=\"springy-replay-time\" min=\"0\" "
+            "max=\"0\" value=\"0\" aria-label=\"time\"><span class=\"springy-replay-label\">loading&hellip;</span>"
+            "<label><input type=\"checkbox\" class=\"springy-replay-follow\"> follow the video</label></div>\n"
+            "<p class=\"files\">Drag to turn, scroll to zoom, right-drag to pan.</p></div>\n</section>\n";
+    page += "<section class=\"sheet\"><h2>Contact sheet</h2><img src=\"" + urlPath(s.stem + "_sheet.png") +
+            "\" alt=\"stills of " + escaped(r.scene) + " at eight times\"></section>\n";
+  } else if (r.status != SceneRecord::Status::Error) {
+    page += "<section><h2>Video</h2><p>No video: the run is not a valid motion (springy shows no video of an "
+            "unstable run). The plots below go up to where it stopped.</p></section>\n";
+  }
+  if (!series.time.empty()) {
+    page += "<section><h2>Over time</h2>\n<div class=\"plots\">";
+    for (const char* plot : {"energy", "volume", "strain", "contacts"}) {
+      if (fs::exists(dir / (std::string(plot) + ".svg"))) {
+        page += std::string("<img src=\"") + plot + ".svg\" alt=\"" + plot + " over time\">";
+      }
+    }
+    page += "</div>\n</section>\n";
+  }
+  if (!r.bodies.empty()) page += "<section><h2>Check</h2>\n" + checkTable(r, o) + "</section>\n";
+  page += "<section><h2>Files</h2><ul class=\"files\">";
+  const auto file = [&](const std::string& name, const std::string& what) {
+    if (fs::exists(dir / name)) page += "<li><a href=\"" + urlPath(name) + "\">" + escaped(name) + "</a>: " + what + "</li>";
+  };
+  file(s.stem + ".mp4", "the video (H.264)");
+  file("trace.csv", "check's trace: per frame and body, centroid, volume, energies, strain, contacts");
+  file("check.json", "check's results (as <code>check --json</code>)");
+  file("series.dat", "the plotted numbers");
+  file("plots.gp", "the plots' gnuplot script");
+  file("scene.toml", "the scene file as it was run");
+  page += "</ul></section>\n</main>\n";
+  if (s.motion) page += "<script src=\"replay.js\"></script>\n<script src=\"../assets/viewer.js\"></script>\n";
+  page += "</body>\n</html>\n";
+  writeText(dir / "index.html", page);
+}
+
+// One scene: check (trace, records, replay), then the video and the sheet, the plots, the page.
+// Returns false when interrupted.
+bool reportScene(const fs::path& root, SceneResult& s, const ReportOptions& o) {
+  const fs::path dir = root / s.stem;
+  makeDirectories(dir.string(), "report");
+  Series series;
+  CheckOptions c;
+  c.scenes = {s.path};
+  c.overrides = o.overrides;
+  c.trace = (dir / "trace.csv").string();
+  c.json = (dir / "check.json").string();
+  c.exportOutput = (dir / "replay.js").string();
+  c.replay = true;
+  c.exportOnCriterionFailure = true;
+  c.minVolume = o.minVolume;
+  c.endVolume = o.endVolume;
+  c.endAtRest = o.endAtRest;
+  c.command = "report";
+  std::vector<SceneRecord> records;
+  c.records = &records;
+  c.onFrame = [&series](long k, const World& world, const Monitor& monitor) {
+    if (k == 1) series.clear();
+    series.add(world, monitor);
+  };
+  runCheck(c);
+  if (interrupted()) return false;
+  s.record = records.at(0);
+  s.vertices = series.vertices;
+  s.motion = fs::exists(dir / "replay.js");
+  if (fs::exists(s.path)) copyFile(s.path, dir / "scene.toml");
+  if (s.motion) {
+    std::vector<std::string> args = {"render", s.path, "-o", (dir / (s.stem + ".mp4")).string()};
+    for (const std::string& a : overrideArgs(o.overrides)) args.push_back(a);
+    runRenderer(args, s.path + ": the video");
+    if (interrupted()) return false;
+    // The sheet's stills at half the video's size: eight of them make a sheet twice its width.
+    args = {"frames", s.path, "-o", dir.string(), "--sheet-only"};
+    for (const std::string& a : overrideArgs(o.overrides)) args.push_back(a);
+    const SceneDesc scene = loadSceneSetting(s.path, o.overrides.sets);
+    const auto half = [](int pixels) { return std::to_string(std::max(16, pixels / 4 * 2)); };
+    args.insert(args.end(), {"--width", half(scene.view.render.width), "--height", half(scene.view.render.height)});
+    runRenderer(args, s.path + ": the contact sheet");
+    if (interrupted()) return false;
+  }
+  if (!series.time.empty()) writePlots(dir, series);
+  writeScenePage(dir, s, o, series);
+  return true;
+}
+
+// ---- a sweep -------------------------------------------------------------------------------
+
+// A task's member, or an empty array or object where it has none (a reference: never a temporary
+// to loop over).
+const Json& member(const Json& t, const char* key, bool array) {
+  static const Json kArray = Json::array(), kObject = Json::object();
+  return t.contains(key) ? t[key] : array ? kArray : kObject;
+}
+
+// A task's figure: over its bodies, the lowest volume or the largest of the rest.
+std::optional<double> taskFigure(const Json& task, const std::string& figure) {
+  std::optional<double> out;
+  if (!task.contains("records")) return out;
+  for (const Json& record : task["records"]) {
+    for (const Json& body : member(record, "bodies", true)) {
+      const Json* v = body.contains(figure) ? &body[figure] : nullptr;
+      if (!v || !v->is_number()) continue;
+      const double x = v->get<double>();
+      const bool lowest = figure.rfind("volume", 0) == 0;
+      out = !out ? x : lowest ? std::min(*out, x) : std::max(*out, x);
+    }
+  }
+  return out;
+}
+
+std::string jsonText(const Json& v) {
+  if (v.is_string()) return v.get<std::string>();
+  if (v.is_number_float()) return number(v.get<double>(), "%.6g");
+  return v.dump();
+}
+
+void reportSweep(const fs::path& root, const ReportOptions& o, std::string& overview) {
+  const fs::path from(o.sweep);
+  const fs::path tableFile = from / "table.json";
+  if (!fs::exists(tableFile)) {
+    throw Error("--sweep " + o.sweep + ": no table.json there (is it a sweep's folder? `springy gather " +
+                (from / "manifest.jsonl").string() + "` writes it)");
+  }
+  Json table;
+  try {
+    table = Json::parse(readText(tableFile));
+  } catch (const Json::exception& e) {
+    throw Error(tableFile.string() + ": not a sweep's table: " + e.what());
+  }
+  if (!table.contains("tasks") || !table["tasks"].is_array()) throw Error(tableFile.string() + ": no \"tasks\" in it");
+  const Json& tasks = table["tasks"];
+  // The keys, in the first task's order; those that take more than one value are swept.
+  std::vector<std::string> keys;
+  std::map<std::string, std::set<std::string>> values;
+  for (const Json& t : tasks) {
+    for (const auto& [key, value] : member(t, "point", false).items()) {
+      if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+      values[key].insert(value.dump());
+    }
+  }
+  std::vector<std::string> swept;
+  for (const std::string& k : keys) {
+    if (values[k].size() > 1) swept.push_back(k);
+  }
+  const std::string x = !o.x.empty() ? o.x : swept.empty() ? std::string() : swept[0];
+  if (!o.x.empty() && std::find(keys.begin(), keys.end(), o.x) == keys.end()) {
+    std::string known;
+    for (const std::string& k : keys) known += (known.empty() ? "" : ", ") + k;
+    throw Error("--x " + o.x + ": the sweep has no such key (its keys: " + known + ")");
+  }
+  const std::string y = o.y.empty() ? "volume_min" : o.y;
+  const std::vector<std::string> figures = {"volume_min", "volume_end", "max_strain", "max_penetration", "steps",
+                                            "kinetic", "elastic"};
+  if (std::find(figures.begin(), figures.end(), y) == figures.end()) {
+    throw Error("--y " + y + ": not a figure of the table; give volume_min, volume_end, max_strain, max_penetration, "
+                "steps, kinetic or elastic");
+  }
+  const std::string series = std::find(swept.begin(), swept.end(), x) != swept.end() && swept.size() > 1
+                                 ? (swept[0] == x ? swept[1] : swept[0])
+                                 : std::string();
+  const fs::path dir = root / "sweep";
+  makeDirectories(dir.string(), "report");
+
+  std::string rows;
+  std::map<std::string, std::string> lines[2];  // per series value: the plot's points, ok and failed
+  int failed = 0;
+  for (const Json& t : tasks) {
+    const long index = t.value("task", -1L);
+    char name[32];
+    std::snprintf(name, sizeof name, "task-%04ld.html", index);
+    const std::string status = t.value("status", std::string("missing"));
+    const bool ok = status == "ok";
+    failed += ok ? 0 : 1;
+    const Json& point = member(t, "point", false);
+    rows += "<tr><td><a href=\"" + std::string(name) + "\">" + std::to_string(index) + "</a></td><td>" +
+            escaped(t.value("scene", std::string())) + "</td>";
+    for (const std::string& k : keys) rows += "<td>" + (point.contains(k) ? escaped(jsonText(point[k])) : "-") + "</td>";
+    rows += std::string("<td class=\"") + (ok ? "ok" : "bad") + "\">" + escaped(status) + "</td>";
+    for (const char* f : {"volume_min", "max_strain", "max_penetration", "steps"}) {
+      const std::optional<double> v = taskFigure(t, f);
+      rows += "<td>" + (v ? number(*v, std::strcmp(f, "steps") == 0 ? "%.0f" : "%.4g") : "-") + "</td>";
+    }
+    rows += "<td class=\"message\">" + escaped(t.value("message", std::string())) + "</td></tr>\n";
+    const std::optional<double> fy = taskFigure(t, y);
+    if (!x.empty() && point.contains(x) && point[x].is_number() && fy) {
+      const std::string s = series.empty() ? "" : point.contains(series) ? jsonText(point[series]) : "-";
+      lines[ok ? 0 : 1][s] += exact(point[x].get<double>()) + " " + exact(*fy) + "\n";
+    }
+    // The task's page: its point, command, result and log.
+    std::string page = pageHead("springy sweep task " + std::to_string(index), "../assets/");
+    page += "<header><h1>Task " + std::to_string(index) + " " + badge(ok, status) + "</h1><p>" +
+            escaped(t.value("scene", std::string())) + " &middot; <a href=\"index.html\">the sweep</a> &middot; <a "
+            "href=\"../index.html\">all of the report</a></p></header>\n<main>\n<section><h2>Point</h2><dl class=\"facts\">";
+    for (const auto& [k, v] : point.items()) page += "<dt>" + escaped(k) + "</dt><dd>" + escaped(jsonText(v)) + "</dd>";
+    page += "</dl>\n<h3>command</h3><pre>springy";
+    for (const Json& a : member(t, "command", true)) page += " " + escaped(jsonText(a));
+    page += "</pre>\n";
+    if (!t.value("message", std::string()).empty()) {
+      page += "<div class=\"message\">" + escaped(t.value("message", std::string())) + "</div>\n";
+    }
+    page += "</section>\n";
+    for (const Json& record : member(t, "records", true)) {
+      try {
+        const SceneRecord r = recordFromJson(record, tableFile.string());
+        page += "<section><h2>" + escaped(r.scene) + ": " + escaped(r.integrator) + ", step " + stepText(r) +
+                "</h2>\n" + checkTable(r, ReportOptions{}) + "</section>\n";
+      } catch (const Error&) {
+        // A record of another version: shown as data below.
+        page += "<section><pre>" + escaped(record.dump(2)) + "</pre></section>\n";
+      }
+    }
+    char logName[32];
+    std::snprintf(logName, sizeof logName, "logs/%04ld.log", index);
+    if (fs::exists(from / logName)) {
+      std::string log = readText(from / logName);
+      if (log.size() > 200000) log = log.substr(0, 200000) + "\n[... cut at 200 kB]\n";
+      page += "<section><h2>Log</h2><pre>" + escaped(log) + "</pre></section>\n";
+    }
+    page += "</main>\n</body>\n</html>\n";
+    writeText(dir / name, page);
+  }
+
+  std::string plot;
+  if (!x.empty() && (!lines[0].empty() || !lines[1].empty())) {
+    std::string dat, plots;
+    int block = 0;
+    for (int failedLine = 0; failedLine < 2; ++failedLine) {
+      for (const auto& [s, points] : lines[failedLine]) {
+        dat += points + "\n\n";
+        const std::string title = (series.empty() ? std::string() : series + " = " + s) +
+                                  (failedLine ? std::string(series.empty() ? "" : ", ") + "failed" : "");
+        plots += std::string(plots.empty() ? "" : ", ") + "'sweep.dat' index " + std::to_string(block++) +
+                 (failedLine ? " with points pt 2 ps 1.5 lc rgb '#a4161a'" : " with linespoints lw 2 pt 7") +
+                 " title " + gnuplotText(title.empty() ? y : title);
+      }
+    }
+    writeText(dir / "sweep.dat", dat);
+    std::string gp = std::string("# springy report: ") + y + " against " + x + "\n" + kSvgTerminal +
+                     "set output 'sweep.svg'\nset xlabel " + gnuplotText(x) + "\nset ylabel " +
+                     gnuplotText(y + (y.rfind("volume", 0) == 0 ? " (lowest body)" : " (largest body)")) +
+                     "\nset title " + gnuplotText(y + " against " + x) + "\nplot " + plots + "\n";
+    writeText(dir / "sweep.gp", gp);
+    runGnuplot(dir / "sweep.gp");
+    plot = "<section><h2>" + escaped(y) + " against " + escaped(x) + "</h2><img src=\"sweep.svg\" alt=\"" +
+           escaped(y) + " against " + escaped(x) + "\" style=\"max-width:760px;width:100%\"><p class=\"files\">"
+           "<a href=\"sweep.dat\">sweep.dat</a>, <a href=\"sweep.gp\">sweep.gp</a>; another figure: "
+           "<code>springy report --sweep DIR --x KEY --y FIGURE</code></p></section>\n";
+  }
+  std::string page = pageHead("springy sweep " + from.filename().string(), "../assets/");
+  page += "<header><h1>Sweep " + escaped(from.filename().string()) + "</h1><p>" + std::to_string(tasks.size()) +
+          " tasks, " + std::to_string(failed) + " not ok &middot; <a href=\"../index.html\">all of the report</a>"
+          "</p></header>\n<main>\n" + plot + "<section><h2>Tasks</h2>\n<table>\n<tr><th>task</th><th>scene</th>";
+  for (const std::string& k : keys) page += "<th>" + escaped(k) + "</th>";
+  page += "<th>status</th><th>volume min</th><th>max strain</th><th>max pen. [m]</th><th>steps</th><th>message</th>"
+          "</tr>\n" + rows + "</table>\n</section>\n</main>\n</body>\n</html>\n";
+  writeText(dir / "index.html", page);
+  overview += "<section><h2>Sweep</h2><p><a href=\"sweep/index.html\">" + escaped(from.filename().string()) +
+              "</a>: " + std::to_string(tasks.size()) + " tasks, " + std::to_string(failed) +
+              " not ok</p></section>\n";
+}
+
+// ---- a study -------------------------------------------------------------------------------
+
+// Markdown (GitHub's flavour: tables) as HTML, by cmark-gfm. A link to another page of the study
+// (.md) goes to its .html; a link to anything the report does not hold (the repository's sources,
+// a page outside the study) keeps its text and loses its target, so nothing in the report points
+// at a file that is not there. `held(path)`: whether the report holds the study's file `path`.
+template <typename Held>
+std::string markdownHtml(const std::string& text, Held&& held) {
+  cmark_gfm_core_extensions_ensure_registered();
+  cmark_parser* parser = cmark_parser_new(CMARK_OPT_DEFAULT);
+  for (const char* name : {"table", "autolink", "strikethrough"}) {
+    if (cmark_syntax_extension* e = cmark_find_syntax_extension(name)) cmark_parser_attach_syntax_extension(parser, e);
+  }
+  cmark_parser_feed(parser, text.data(), text.size());
+  cmark_node* doc = cmark_parser_finish(parser);
+  std::vector<cmark_node*> unlinked;
+  cmark_iter* it = cmark_iter_new(doc);
+  for (cmark_event_type ev; (ev = cmark_iter_next(it)) != CMARK_EVENT_DONE;) {
+    cmark_node* node = cmark_iter_get_node(it);
+    const cmark_node_type type = cmark_node_get_type(node);
+    if (ev != CMARK_EVENT_ENTER || (type != CMARK_NODE_LINK && type != CMARK_NODE_IMAGE)) continue;
+    std::string url = cmark_node_get_url(node) ? cmark_node_get_url(node) : "";
+    if (url.empty() || url[0] == '#' || url.find("://") != std::string::npos) continue;
+    const std::size_t hash = url.find('#');
+    const std::string file = url.substr(0, hash), anchor = hash == std::string::npos ? "" : url.substr(hash);
+    if (file.size() > 3 && file.compare(file.size() - 3, 3, ".md") == 0 && held(file)) {
+      cmark_node_set_url(node, (file.substr(0, file.size() - 3) + ".html" + anchor).c_str());
+    } else if (!held(file) && type == CMARK_NODE_LINK) {
+      unlinked.push_back(node);
+    }
+  }
+  cmark_iter_free(it);
+  for (cmark_node* link : unlinked) {
+    while (cmark_node* child = cmark_node_first_child(link)) cmark_node_insert_before(link, child);
+    cmark_node_free(link);
+  }
+  char* html = cmark_render_html(doc, CMARK_OPT_DEFAULT, cmark_parser_get_syntax_extensions(parser));
+  std::string out(html);
+  std::free(html);
+  cmark_node_free(doc);
+  cmark_parser_free(parser);
+  return out;
+}
+
+void reportStudy(const fs::path& root, const ReportOptions& o, std::string& overview) {
+  const fs::path from(o.study);
+  std::vector<fs::path> pages;
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(from, ec)) {
+    if (e.path().extension() == ".md") pages.push_back(e.path());
+  }
+  if (ec) throw Error("--study " + o.study + ": cannot read the folder: " + ec.message());
+  if (pages.empty()) {
+    throw Error("--study " + o.study + ": no study's pages (.md) there; `springy study accuracy -o " + o.study +
+                "` writes them");
+  }
+  std::sort(pages.begin(), pages.end());
+  const fs::path dir = root / "study";
+  makeDirectories(dir.string(), "report");
+  overview += "<section><h2>Study</h2><ul>";
+  for (const fs::path& md : pages) {
+    const std::string text = readText(md);
+    // The plots and tables the page names come along.
+    for (const fs::directory_entry& e : fs::directory_iterator(from)) {
+      const std::string name = e.path().filename().string();
+      const std::string ext = e.path().extension().string();
+      if ((ext == ".png" || ext == ".svg" || ext == ".csv" || ext == ".dat" || ext == ".gp") &&
+          text.find(name) != std::string::npos && !fs::exists(dir / name)) {
+        copyFile(e.path(), dir / name);
+      }
+    }
+  }
+  const auto held = [&](const std::string& file) {
+    if (file.find('/') != std::string::npos) return false;  // the study's pages and files sit side by side
+    if (file.size() > 3 && file.compare(file.size() - 3, 3, ".md") == 0) return fs::exists(from / file);
+    return fs::exists(dir / file);
+  };
+  for (const fs::path& md : pages) {
+    const std::string text = readText(md);
+    const std::string name = md.stem().string();
+    std::string page = pageHead("springy study: " + name, "../assets/");
+    page += "<header><h1>" + escaped(name) + "</h1><p>" + escaped(md.string()) +
+            " &middot; <a href=\"../index.html\">all of the report</a></p></header>\n<main><section class=\"study\">\n" +
+            markdownHtml(text, held) + "</section></main>\n</body>\n</html>\n";
+    writeText(dir / (name + ".html"), page);
+    overview += "<li><a href=\"study/" + urlPath(name) + ".html\">" + escaped(name) + "</a></li>";
+  }
+  overview += "</ul></section>\n";
+}
+
+}  // namespace
+
+int runReport(const ReportOptions& o) {
+  if (o.scenes.empty() && o.sweep.empty() && o.study.empty()) {
+    throw Error("report: give scenes, --sweep DIR or --study DIR");
+  }
+  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+    throw Error("report: gnuplot is not installed (its plots need it): apt install gnuplot-nox");
+  }
+  // Each scene gets its folder, named by its file.
+  std::vector<SceneResult> scenes;
+  for (const std::string& path : o.scenes) {
+    SceneResult& s = scenes.emplace_back();
+    s.path = path;
+    s.stem = fs::path(path).stem().string();
+    if (s.stem == "assets" || s.stem == "sweep" || s.stem == "study") s.stem += "-scene";
+    for (std::size_t j = 0; j + 1 < scenes.size(); ++j) {
+      if (scenes[j].stem == s.stem) throw Error("report: " + scenes[j].path + " and " + path + " share the name " + s.stem);
+    }
+  }
+  OutputFolder out(o.output, kMarker, "springy report: this folder is replaced by the next report written to it\n",
+                   "-o " + o.output);
+  const fs::path root(out.temporaryPath());
+  makeDirectories((root / "assets").string(), "report");
+  writeText(root / "assets" / "viewer.js",
+            std::string(springy_report_viewer, static_cast<std::size_t>(springy_report_viewer_end - springy_report_viewer)));
+  writeText(root / "assets" / "report.css",
+            std::string(springy_report_style, static_cast<std::size_t>(springy_report_style_end - springy_report_style)));
+
+  int status = 0;
+  std::string rows;
+  for (SceneResult& s : scenes) {
+    if (!reportScene(root, s, o)) {
+      std::cerr << "springy report: interrupted\n";
+      return interruptedExitStatus();
+    }
+    const SceneRecord& r = s.record;
+    const bool ok = r.status == SceneRecord::Status::Ok;
+    status = ok ? status : 1;
+    double volumeMin = std::numeric_limits<double>::infinity(), strain = 0.0;
+    for (const BodyResult& b : r.bodies) {
+      if (b.volumeMin) volumeMin = std::min(volumeMin, *b.volumeMin);
+      strain = std::max(strain, b.maxStrain);
+    }
+    rows += "<tr><td><a href=\"" + urlPath(s.stem) + "/index.html\">" + escaped(r.scene.empty() ? s.stem : r.scene) +
+            "</a></td><td class=\"" + (ok ? "ok" : "bad") + "\">" + statusName(r.status) + "</td><td>" +
+            escaped(r.integrator) + "</td><td>" + stepText(r) + "</td><td>" + number(r.duration) + " s</td><td>" +
+            std::to_string(r.bodies.size()) + "</td><td>" + number(volumeMin, "%.3f") + "</td><td>" + number(strain) +
+            "</td><td>" + number(r.wall, "%.3g") + " s</td><td>" +
+            (s.motion ? "<a href=\"" + urlPath(s.stem) + "/index.html\"><img class=\"thumb\" src=\"" +
+                            urlPath(s.stem + "/" + s.stem + "_sheet.png") + "\" alt=\"contact sheet\"></a>"
+                      : std::string("-")) +
+            "</td></tr>\n";
+  }
+  std::string extra;
+  if (!o.sweep.empty()) reportSweep(root, o, extra);
+  if (!o.study.empty()) reportStudy(root, o, extra);
+
+  std::string page = pageHead("springy report", "assets/");
+  page += "<header><h1>springy report</h1><p>";
+  for (const std::string& a : o.command) page += escaped(a) + " ";
+  page += "</p></header>\n<main>\n";
+  if (!scenes.empty()) {
+    page += "<section><h2>Scenes</h2>\n<table>\n<tr><th>scene</th><th>result</th><th>integrator</th><th>step</th>"
+            "<th>simulated</th><th>bodies</th><th>volume min</th><th>max strain</th><th>wall</th><th>contact sheet"
+            "</th></tr>\n" + rows + "</table>\n<p class=\"files\">Criteria: " + criteriaText(o) + ".</p></section>\n";
+  }
+  page += extra + "</main>\n</body>\n</html>\n";
+  writeText(root / "index.html", page);
+  out.commit();
+  std::printf("report: wrote %s/index.html\n", out.target().c_str());
+  return status;
+}
+
+}  // namespace springy

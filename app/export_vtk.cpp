@@ -18,6 +18,7 @@
 #include <memory>
 
 #include "app/atomic_file.h"
+#include "app/records.h"
 #include "app/export.h"
 #include "app/folder.h"
 #include "sim/error.h"
@@ -55,21 +56,6 @@ std::string arrayXml(const char* type, const char* name, int components, uint64_
   if (name) s += std::string(" Name=\"") + name + "\"";
   if (components > 1) s += " NumberOfComponents=\"" + std::to_string(components) + "\"";
   return s + " format=\"appended\" offset=\"" + std::to_string(offset) + "\"/>\n";
-}
-
-// XML attribute text: & < > " escaped.
-std::string escaped(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 class VtkSeriesExport final : public MotionExport {
@@ -157,7 +143,7 @@ class VtkSeriesExport final : public MotionExport {
     for (long k = 0; k <= frames_; ++k) {
       for (std::size_t i = 0; i < bodies_.size(); ++i) {
         xml += "<DataSet timestep=\"" + number(times_[static_cast<std::size_t>(k)]) + "\" group=\"\" part=\"" +
-               std::to_string(i) + "\" name=\"" + escaped(bodies_[i].name) + "\" file=\"" + escaped(folderName_) +
+               std::to_string(i) + "\" name=\"" + xmlEscaped(bodies_[i].name) + "\" file=\"" + xmlEscaped(folderName_) +
                "/" + fileName(i, k) + "\"/>\n";
       }
     }

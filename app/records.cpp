@@ -10,7 +10,6 @@
 #include "sim/error.h"
 
 namespace springy {
-namespace {
 
 std::string xmlEscaped(const std::string& text) {
   std::string out;
@@ -32,6 +31,8 @@ std::string xmlEscaped(const std::string& text) {
   }
   return out;
 }
+
+namespace {
 
 // JSON has no NaN or infinity: those (a blown-up run's energies) are written as strings.
 Json number(double value) { return std::isfinite(value) ? Json(value) : Json(exactNumber(value)); }

@@ -54,6 +54,10 @@ std::string recordsJson(const std::vector<SceneRecord>& records);
 // the timestamp is now, local time, and the host this one.
 std::string junitXml(const std::vector<SceneRecord>& records);
 
+// Text for XML or HTML (an attribute's value or an element's text): & < > " ' as entities, control
+// characters (not allowed in XML 1.0) but tab and line breaks as spaces.
+std::string xmlEscaped(const std::string& text);
+
 // A number in its shortest text that reads back to the same double ("0.1", "1e-05", "nan").
 std::string exactNumber(double value);
 

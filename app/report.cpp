@@ -31,6 +31,7 @@
 #include <cstring>
 
 #include "app/atomic_file.h"
+#include "app/records.h"
 #include "app/child.h"
 #include "app/commands.h"
 #include "app/folder.h"
@@ -49,20 +50,6 @@ namespace fs = std::filesystem;
 constexpr const char* kMarker = ".springy-report";
 constexpr std::size_t kMaxBodiesDrawnApart = 8;  // more bodies: the plots show the extremes over them
 
-std::string escaped(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 // A path inside a page's href or src: each byte that is not safe in a URL as %XX.
 std::string urlPath(const std::string& path) {
@@ -107,11 +94,11 @@ void copyFile(const fs::path& from, const fs::path& to) { writeText(to, readText
 std::string pageHead(const std::string& title, const std::string& assets) {
   return "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
          "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>" +
-         escaped(title) + "</title>\n<link rel=\"stylesheet\" href=\"" + assets + "report.css\">\n</head>\n<body>\n";
+         xmlEscaped(title) + "</title>\n<link rel=\"stylesheet\" href=\"" + assets + "report.css\">\n</head>\n<body>\n";
 }
 
 std::string badge(bool ok, const std::string& text) {
-  return std::string("<span class=\"") + (ok ? "ok" : "bad") + "\">" + escaped(text) + "</span>";
+  return std::string("<span class=\"") + (ok ? "ok" : "bad") + "\">" + xmlEscaped(text) + "</span>";
 }
 
 // The command line of springy-render for the run's overrides (the same run as check's).
@@ -275,7 +262,7 @@ std::string checkTable(const SceneRecord& r, const ReportOptions& o) {
       return "<td" + cls + ">" + number(*v, std::abs(*v) < 1e3 ? "%.3f" : "%.3g") + "</td>";
     };
     const std::string rest = o.endAtRest ? (body.atRest ? " class=\"ok\"" : " class=\"bad\"") : "";
-    t += "<tr><td>" + escaped(body.name) + "</td><td>" + std::to_string(body.steps) + "</td><td>" +
+    t += "<tr><td>" + xmlEscaped(body.name) + "</td><td>" + std::to_string(body.steps) + "</td><td>" +
          number(body.maxStrain) + "</td><td>" + number(body.maxPenetration, "%.2e") + "</td>" +
          volume(body.volumeMin, o.minVolume) + volume(body.volumeEnd, o.endVolume) + "<td>" + number(body.kinetic) +
          "</td><td>" + number(body.elastic) + "</td><td" + rest + ">" + (body.atRest ? "yes" : "no") + "</td>" +
@@ -306,11 +293,11 @@ void writeScenePage(const fs::path& dir, const SceneResult& s, const ReportOptio
   const SceneRecord& r = s.record;
   const bool ok = r.status == SceneRecord::Status::Ok;
   std::string page = pageHead("springy report: " + r.scene, "../assets/");
-  page += "<header><h1>" + escaped(r.scene) + "</h1><p>" + escaped(s.path) +
+  page += "<header><h1>" + xmlEscaped(r.scene) + "</h1><p>" + xmlEscaped(s.path) +
           " &middot; <a href=\"../index.html\">all of the report</a></p></header>\n<main>\n";
   page += "<section><h2>Result " + badge(ok, statusName(r.status)) + "</h2>\n";
-  if (!r.message.empty()) page += "<div class=\"message\">" + escaped(r.message) + "</div>\n";
-  page += "<dl class=\"facts\"><dt>integrator</dt><dd>" + escaped(r.integrator.empty() ? "-" : r.integrator) +
+  if (!r.message.empty()) page += "<div class=\"message\">" + xmlEscaped(r.message) + "</div>\n";
+  page += "<dl class=\"facts\"><dt>integrator</dt><dd>" + xmlEscaped(r.integrator.empty() ? "-" : r.integrator) +
           "</dd><dt>step</dt><dd>" + stepText(r) + "</dd><dt>simulated</dt><dd>" + number(r.duration) + " s" +
           (ok || series.time.empty() || series.time.back() >= r.duration - 1e-6 ? std::string() : ", stopped at " + number(series.time.back()) + " s") +
           "</dd><dt>bodies</dt><dd>" + std::to_string(r.bodies.size()) + " (" + std::to_string(s.vertices) +
@@ -329,7 +316,7 @@ void writeScenePage(const fs::path& dir, const SceneResult& s, const ReportOptio
             "<label><input type=\"checkbox\" class=\"springy-replay-follow\"> follow the video</label></div>\n"
             "<p class=\"files\">Drag to turn, scroll to zoom, right-drag to pan.</p></div>\n</section>\n";
     page += "<section class=\"sheet\"><h2>Contact sheet</h2><img src=\"" + urlPath(s.stem + "_sheet.png") +
-            "\" alt=\"stills of " + escaped(r.scene) + " at eight times\"></section>\n";
+            "\" alt=\"stills of " + xmlEscaped(r.scene) + " at eight times\"></section>\n";
   } else if (r.status != SceneRecord::Status::Error) {
     page += "<section><h2>Video</h2><p>No video: the run is not a valid motion (springy shows no video of an "
             "unstable run). The plots below go up to where it stopped.</p></section>\n";
@@ -346,7 +333,7 @@ void writeScenePage(const fs::path& dir, const SceneResult& s, const ReportOptio
   if (!r.bodies.empty()) page += "<section><h2>Check</h2>\n" + checkTable(r, o) + "</section>\n";
   page += "<section><h2>Files</h2><ul class=\"files\">";
   const auto file = [&](const std::string& name, const std::string& what) {
-    if (fs::exists(dir / name)) page += "<li><a href=\"" + urlPath(name) + "\">" + escaped(name) + "</a>: " + what + "</li>";
+    if (fs::exists(dir / name)) page += "<li><a href=\"" + urlPath(name) + "\">" + xmlEscaped(name) + "</a>: " + what + "</li>";
   };
   file(s.stem + ".mp4", "the video (H.264)");
   file("trace.csv", "check's trace: per frame and body, centroid, volume, energies, strain, contacts");
@@ -499,14 +486,14 @@ void reportSweep(const fs::path& root, const ReportOptions& o, std::string& over
     failed += ok ? 0 : 1;
     const Json& point = member(t, "point", false);
     rows += "<tr><td><a href=\"" + std::string(name) + "\">" + std::to_string(index) + "</a></td><td>" +
-            escaped(t.value("scene", std::string())) + "</td>";
-    for (const std::string& k : keys) rows += "<td>" + (point.contains(k) ? escaped(jsonText(point[k])) : "-") + "</td>";
-    rows += std::string("<td class=\"") + (ok ? "ok" : "bad") + "\">" + escaped(status) + "</td>";
+            xmlEscaped(t.value("scene", std::string())) + "</td>";
+    for (const std::string& k : keys) rows += "<td>" + (point.contains(k) ? xmlEscaped(jsonText(point[k])) : "-") + "</td>";
+    rows += std::string("<td class=\"") + (ok ? "ok" : "bad") + "\">" + xmlEscaped(status) + "</td>";
     for (const char* f : {"volume_min", "max_strain", "max_penetration", "steps"}) {
       const std::optional<double> v = taskFigure(t, f);
       rows += "<td>" + (v ? number(*v, std::strcmp(f, "steps") == 0 ? "%.0f" : "%.4g") : "-") + "</td>";
     }
-    rows += "<td class=\"message\">" + escaped(t.value("message", std::string())) + "</td></tr>\n";
+    rows += "<td class=\"message\">" + xmlEscaped(t.value("message", std::string())) + "</td></tr>\n";
     const std::optional<double> fy = taskFigure(t, y);
     if (!x.empty() && point.contains(x) && point[x].is_number() && fy) {
       const std::string s = series.empty() ? "" : point.contains(series) ? jsonText(point[series]) : "-";
@@ -515,24 +502,24 @@ void reportSweep(const fs::path& root, const ReportOptions& o, std::string& over
     // The task's page: its point, command, result and log.
     std::string page = pageHead("springy sweep task " + std::to_string(index), "../assets/");
     page += "<header><h1>Task " + std::to_string(index) + " " + badge(ok, status) + "</h1><p>" +
-            escaped(t.value("scene", std::string())) + " &middot; <a href=\"index.html\">the sweep</a> &middot; <a "
+            xmlEscaped(t.value("scene", std::string())) + " &middot; <a href=\"index.html\">the sweep</a> &middot; <a "
             "href=\"../index.html\">all of the report</a></p></header>\n<main>\n<section><h2>Point</h2><dl class=\"facts\">";
-    for (const auto& [k, v] : point.items()) page += "<dt>" + escaped(k) + "</dt><dd>" + escaped(jsonText(v)) + "</dd>";
+    for (const auto& [k, v] : point.items()) page += "<dt>" + xmlEscaped(k) + "</dt><dd>" + xmlEscaped(jsonText(v)) + "</dd>";
     page += "</dl>\n<h3>command</h3><pre>springy";
-    for (const Json& a : member(t, "command", true)) page += " " + escaped(jsonText(a));
+    for (const Json& a : member(t, "command", true)) page += " " + xmlEscaped(jsonText(a));
     page += "</pre>\n";
     if (!t.value("message", std::string()).empty()) {
-      page += "<div class=\"message\">" + escaped(t.value("message", std::string())) + "</div>\n";
+      page += "<div class=\"message\">" + xmlEscaped(t.value("message", std::string())) + "</div>\n";
     }
     page += "</section>\n";
     for (const Json& record : member(t, "records", true)) {
       try {
         const SceneRecord r = recordFromJson(record, tableFile.string());
-        page += "<section><h2>" + escaped(r.scene) + ": " + escaped(r.integrator) + ", step " + stepText(r) +
+        page += "<section><h2>" + xmlEscaped(r.scene) + ": " + xmlEscaped(r.integrator) + ", step " + stepText(r) +
                 "</h2>\n" + checkTable(r, ReportOptions{}) + "</section>\n";
       } catch (const Error&) {
         // A record of another version: shown as data below.
-        page += "<section><pre>" + escaped(record.dump(2)) + "</pre></section>\n";
+        page += "<section><pre>" + xmlEscaped(record.dump(2)) + "</pre></section>\n";
       }
     }
     char logName[32];
@@ -540,7 +527,7 @@ void reportSweep(const fs::path& root, const ReportOptions& o, std::string& over
     if (fs::exists(from / logName)) {
       std::string log = readText(from / logName);
       if (log.size() > 200000) log = log.substr(0, 200000) + "\n[... cut at 200 kB]\n";
-      page += "<section><h2>Log</h2><pre>" + escaped(log) + "</pre></section>\n";
+      page += "<section><h2>Log</h2><pre>" + xmlEscaped(log) + "</pre></section>\n";
     }
     page += "</main>\n</body>\n</html>\n";
     writeText(dir / name, page);
@@ -567,20 +554,20 @@ void reportSweep(const fs::path& root, const ReportOptions& o, std::string& over
                      "\nset title " + gnuplotText(y + " against " + x) + "\nplot " + plots + "\n";
     writeText(dir / "sweep.gp", gp);
     runGnuplot(dir / "sweep.gp");
-    plot = "<section><h2>" + escaped(y) + " against " + escaped(x) + "</h2><img src=\"sweep.svg\" alt=\"" +
-           escaped(y) + " against " + escaped(x) + "\" style=\"max-width:760px;width:100%\"><p class=\"files\">"
+    plot = "<section><h2>" + xmlEscaped(y) + " against " + xmlEscaped(x) + "</h2><img src=\"sweep.svg\" alt=\"" +
+           xmlEscaped(y) + " against " + xmlEscaped(x) + "\" style=\"max-width:760px;width:100%\"><p class=\"files\">"
            "<a href=\"sweep.dat\">sweep.dat</a>, <a href=\"sweep.gp\">sweep.gp</a>; another figure: "
            "<code>springy report --sweep DIR --x KEY --y FIGURE</code></p></section>\n";
   }
   std::string page = pageHead("springy sweep " + from.filename().string(), "../assets/");
-  page += "<header><h1>Sweep " + escaped(from.filename().string()) + "</h1><p>" + std::to_string(tasks.size()) +
+  page += "<header><h1>Sweep " + xmlEscaped(from.filename().string()) + "</h1><p>" + std::to_string(tasks.size()) +
           " tasks, " + std::to_string(failed) + " not ok &middot; <a href=\"../index.html\">all of the report</a>"
           "</p></header>\n<main>\n" + plot + "<section><h2>Tasks</h2>\n<table>\n<tr><th>task</th><th>scene</th>";
-  for (const std::string& k : keys) page += "<th>" + escaped(k) + "</th>";
+  for (const std::string& k : keys) page += "<th>" + xmlEscaped(k) + "</th>";
   page += "<th>status</th><th>volume min</th><th>max strain</th><th>max pen. [m]</th><th>steps</th><th>message</th>"
           "</tr>\n" + rows + "</table>\n</section>\n</main>\n</body>\n</html>\n";
   writeText(dir / "index.html", page);
-  overview += "<section><h2>Sweep</h2><p><a href=\"sweep/index.html\">" + escaped(from.filename().string()) +
+  overview += "<section><h2>Sweep</h2><p><a href=\"sweep/index.html\">" + xmlEscaped(from.filename().string()) +
               "</a>: " + std::to_string(tasks.size()) + " tasks, " + std::to_string(failed) +
               " not ok</p></section>\n";
 }
@@ -666,11 +653,11 @@ void reportStudy(const fs::path& root, const ReportOptions& o, std::string& over
     const std::string text = readText(md);
     const std::string name = md.stem().string();
     std::string page = pageHead("springy study: " + name, "../assets/");
-    page += "<header><h1>" + escaped(name) + "</h1><p>" + escaped(md.string()) +
+    page += "<header><h1>" + xmlEscaped(name) + "</h1><p>" + xmlEscaped(md.string()) +
             " &middot; <a href=\"../index.html\">all of the report</a></p></header>\n<main><section class=\"study\">\n" +
             markdownHtml(text, held) + "</section></main>\n</body>\n</html>\n";
     writeText(dir / (name + ".html"), page);
-    overview += "<li><a href=\"study/" + urlPath(name) + ".html\">" + escaped(name) + "</a></li>";
+    overview += "<li><a href=\"study/" + urlPath(name) + ".html\">" + xmlEscaped(name) + "</a></li>";
   }
   overview += "</ul></section>\n";
 }
@@ -719,9 +706,9 @@ int runReport(const ReportOptions& o) {
       if (b.volumeMin) volumeMin = std::min(volumeMin, *b.volumeMin);
       strain = std::max(strain, b.maxStrain);
     }
-    rows += "<tr><td><a href=\"" + urlPath(s.stem) + "/index.html\">" + escaped(r.scene.empty() ? s.stem : r.scene) +
+    rows += "<tr><td><a href=\"" + urlPath(s.stem) + "/index.html\">" + xmlEscaped(r.scene.empty() ? s.stem : r.scene) +
             "</a></td><td class=\"" + (ok ? "ok" : "bad") + "\">" + statusName(r.status) + "</td><td>" +
-            escaped(r.integrator) + "</td><td>" + stepText(r) + "</td><td>" + number(r.duration) + " s</td><td>" +
+            xmlEscaped(r.integrator) + "</td><td>" + stepText(r) + "</td><td>" + number(r.duration) + " s</td><td>" +
             std::to_string(r.bodies.size()) + "</td><td>" + number(volumeMin, "%.3f") + "</td><td>" + number(strain) +
             "</td><td>" + number(r.wall, "%.3g") + " s</td><td>" +
             (s.motion ? "<a href=\"" + urlPath(s.stem) + "/index.html\"><img class=\"thumb\" src=\"" +
@@ -735,7 +722,7 @@ int runReport(const ReportOptions& o) {
 
   std::string page = pageHead("springy report", "assets/");
   page += "<header><h1>springy report</h1><p>";
-  for (const std::string& a : o.command) page += escaped(a) + " ";
+  for (const std::string& a : o.command) page += xmlEscaped(a) + " ";
   page += "</p></header>\n<main>\n";
   if (!scenes.empty()) {
     page += "<section><h2>Scenes</h2>\n<table>\n<tr><th>scene</th><th>result</th><th>integrator</th><th>step</th>"

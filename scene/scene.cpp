@@ -301,6 +301,49 @@ uint32_t extremeVertex(const TriMesh& mesh, int axis, bool highest) {
   return best;
 }
 
+// A motion table (sim/motion.h): [SECTION.motion] of a plane or a triangle collider,
+// [body.pin_motion] of a body's pins.
+//   keys = [[t, x, y, z], ...]       translation keyframes, times strictly increasing
+//   interpolation = "linear" | "cubic"
+//   oscillate = [ax, ay, az], frequency = F [Hz], phase = P [deg]
+//   spin = S [deg/s], axis = [x, y, z], centre = [x, y, z]
+Movement readMotion(const toml::table& table, const std::string& path, const std::string& section) {
+  Reader r(table, path, section);
+  Movement m;
+  if (const toml::node* n = r.get("keys")) {
+    const auto* a = n->as_array();
+    if (!a || a->empty()) r.fail(*n, "keys", "must be an array of keyframes [[t, x, y, z], ...]");
+    for (const toml::node& item : *a) {
+      const auto* k = item.as_array();
+      if (!k || k->size() != 4) r.fail(item, "keys", "each keyframe is [t, x, y, z]: a time [s] and an offset [m]");
+      Movement::Key key{r.asNumber(*k->get(0), "keys"),
+                      {r.asNumber(*k->get(1), "keys"), r.asNumber(*k->get(2), "keys"), r.asNumber(*k->get(3), "keys")}};
+      if (!m.keys.empty() && !(key.time > m.keys.back().time)) {
+        r.fail(item, "keys", "keyframe times must increase (" + std::to_string(key.time) + " s after " +
+                                 std::to_string(m.keys.back().time) + " s)");
+      }
+      m.keys.push_back(key);
+    }
+  }
+  m.cubic = r.choice("interpolation", "linear", {"linear", "cubic"}) == "cubic";
+  m.amplitude = r.vec3("oscillate", {});
+  m.frequency = r.inRange("frequency", 0.0, 0.0, 1e4);
+  m.phase = r.inRange("phase", 0.0, -3600.0, 3600.0) * 3.14159265358979323846 / 180.0;
+  if ((m.frequency > 0.0) != (length(m.amplitude) > 0.0)) {
+    r.failHere("an oscillation needs both oscillate (its amplitude, m) and frequency (Hz)");
+  }
+  m.spin = r.inRange("spin", 0.0, -1e5, 1e5) * 3.14159265358979323846 / 180.0;
+  if (const toml::node* n = r.get("axis")) {
+    const Vec3 axis = r.asVec3(*n, "axis");
+    if (!(length(axis) > 0.0)) r.fail(*n, "axis", "must not be zero");
+    m.axis = normalized(axis);
+  }
+  m.centre = r.vec3("centre", {});
+  r.finish();
+  if (!m.moves()) r.failHere("does not move: give keys (two or more), oscillate and frequency, or spin");
+  return m;
+}
+
 BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t index, Material& material) {
   Reader r(table, path, "[[body]] #" + std::to_string(index + 1));
   BodyDesc b;
@@ -569,6 +612,13 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
       b.pinned.push_back(bestIndex);
     }
   }
+  if (const toml::table* t = r.subtable("pin_motion")) {
+    b.pinMotion = readMotion(*t, path, "[[body]] #" + std::to_string(index + 1) + " pin_motion");
+  }
+  if (r.has("pin_release")) b.pinRelease = r.inRange("pin_release", 0.0, 0.0, 1e9);
+  if ((b.pinMotion.moves() || std::isfinite(b.pinRelease)) && b.pinned.empty()) {
+    r.failHere("pin_motion and pin_release move or free the pinned vertices: pin some (pin, pin_side, pin_near)");
+  }
   material = readMaterial(r, Material{{0.75, 0.2, 0.2}, 1.0, 48.0});
   r.finish();
   return b;
@@ -622,6 +672,9 @@ TriangleCollider readTriangleCollider(const toml::table& table, const std::strin
   const Transform transform = readTransform(r);
   for (Vec3& p : m.positions) p = transform.apply(p);
   c.material = readContact(r);
+  if (const toml::table* t = r.subtable("motion")) {
+    c.motion = readMotion(*t, path, "[[triangles]] #" + std::to_string(index + 1) + " motion");
+  }
   look.material = readMaterial(r, Material{{0.55, 0.5, 0.45}, 1.0, 16.0});
   look.visible = r.boolean("visible", true);
   r.finish();  // first: a misspelt `quads` is an unknown key, not missing geometry
@@ -710,6 +763,10 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
       p.layer = r.inRange("damping_layer", 0.0, 0.0, 1e6);
       if ((p.damping > 0.0) != (p.layer > 0.0)) {
         r.failHere("soft ground needs both damping (the rate, 1/s) and damping_layer (the thickness, m) positive");
+      }
+      if (const toml::table* t = r.subtable("motion")) {
+        p.motion = readMotion(*t, path, "[[plane]] #" + std::to_string(i + 1) + " motion");
+        if (p.layer > 0.0) r.failHere("soft ground (damping, damping_layer) does not move: give it no motion");
       }
       look.material = readMaterial(r, Material{{0.575, 0.54, 0.54}, 1.0, 8.0});
       look.visible = r.boolean("visible", true);

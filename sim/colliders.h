@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "sim/mesh.h"
+#include "sim/motion.h"
 #include "sim/vec3.h"
 
 namespace springy {
@@ -45,6 +46,9 @@ struct PlaneCollider {
   // in a real contact does). 0: a hard surface.
   double damping = 0.0;
   double layer = 0.0;
+  // A plane that moves on its own (point and normal are its placement at rest). Soft ground
+  // does not move.
+  Movement motion{};
 };
 
 // A static triangle mesh with its own BVH (built once by the constructor of Colliders).
@@ -61,6 +65,8 @@ struct TriangleCollider {
   };
   std::vector<Node> nodes;
   std::vector<uint32_t> order;
+  // A mesh that moves on its own (mesh holds it at rest; the tree is over the rest positions).
+  Movement motion{};
   void buildBvh();
 };
 
@@ -69,6 +75,20 @@ struct ContactHit {
   Vec3 point;       // on the surface
   Vec3 normal;      // unit, toward the side the path came from
   ContactMaterial material;
+  // A moving collider: the surface's velocity at the point when hit, and where the point and
+  // the normal are at the end of the step (the surface carries them on). A still one: zero,
+  // and the point and the normal.
+  Vec3 surfaceVelocity;
+  Vec3 endPoint, endNormal;
+  Vec3 before;  // the path up to the hit, as the surface sees it (at the end of the step)
+};
+
+// Where the moving colliders are over one step: at its start t0 and its end t1 (Movement::pose).
+// `any` false: nothing moves (the still colliders' code path, unchanged).
+struct ColliderPoses {
+  double t0 = 0.0, t1 = 0.0;
+  bool any = false;
+  std::vector<Pose> plane0, plane1, mesh0, mesh1;
 };
 
 struct Colliders {
@@ -79,26 +99,45 @@ struct Colliders {
   double restingWindow = 0.02;  // contact within this time [s] counts as sustained (no bounce)
 
   bool empty() const { return planes.empty() && meshes.empty(); }
-  // Earliest hit on the segment from `from` to `to` over all colliders; false if none.
-  bool firstHit(const Vec3& from, const Vec3& to, ContactHit& hit) const;
+  // Whether a collider moves on its own.
+  bool moving() const;
+  // The moving colliders' poses at the step's start and end (out.any: some collider moves).
+  void posesOver(double t0, double t1, ColliderPoses& out) const;
+  // Every moving collider's keyframe times, sorted, once each.
+  std::vector<double> kinks() const;
+  // Earliest hit on the segment from `from` to `to` over all colliders; false if none. With
+  // `poses` (some collider moves), the path is the vertex's from the step's start to its end,
+  // and each moving collider is tested in its own frame: the path from where it is at t0 to
+  // where it is at t1 relative to it, so a surface faster than the vertex does not pass
+  // through it (continuous contact against the moving surface).
+  bool firstHit(const Vec3& from, const Vec3& to, ContactHit& hit, const ColliderPoses* poses = nullptr) const;
   // Resolves one vertex's path: returns the corrected end position and updates `velocity`.
   // `resting`: the vertex is in sustained contact (touched a collider within restingWindow).
-  // Returns true if any contact happened; `first`, when given, receives the first hit.
-  bool resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting, ContactHit* first = nullptr) const;
+  // Returns true if any contact happened; `first`, when given, receives the first hit. At a
+  // moving collider the velocity relative to the surface gets the restitution and the friction
+  // (the surface carries what rests on it).
+  bool resolve(const Vec3& from, Vec3& to, Vec3& velocity, bool resting, ContactHit* first = nullptr,
+               const ColliderPoses* poses = nullptr) const;
   // No collider can be hit on a path that ends at p: there are no triangle meshes and p is on
-  // or in front of every plane (firstHit finds nothing then). Inline: most vertices of most
-  // steps take only this test.
-  bool clearAt(const Vec3& p) const {
+  // or in front of every plane (firstHit finds nothing then; a moving plane where it is at the
+  // step's end). Inline: most vertices of most steps take only this test.
+  bool clearAt(const Vec3& p, const ColliderPoses* poses = nullptr) const {
     if (!meshes.empty()) return false;
+    if (poses && poses->any) return clearOfMovingPlanes(p, *poses);
     for (const PlaneCollider& pl : planes) {
       if (dot(p - pl.point, pl.normal) < 0.0) return false;
     }
     return true;
   }
-  // Largest depth of a point behind any plane (0 when in front of all) [m].
-  double planePenetration(const Vec3& p) const {
+  // Largest depth of a point behind any plane (0 when in front of all) [m]; with `planePoses`
+  // (one per plane), a moving plane where that pose puts it.
+  double planePenetration(const Vec3& p, const Pose* planePoses = nullptr) const {
     double depth = 0.0;
-    for (const PlaneCollider& pl : planes) depth = std::max(depth, -dot(p - pl.point, pl.normal));
+    for (std::size_t i = 0; i < planes.size(); ++i) {
+      const PlaneCollider& pl = planes[i];
+      const Vec3 q = planePoses && pl.motion.moves() ? planePoses[i].inverse(p) : p;
+      depth = std::max(depth, -dot(q - pl.point, pl.normal));
+    }
     return depth;
   }
   // Whether any plane has a damping layer.
@@ -107,6 +146,10 @@ struct Colliders {
   // v_n -> v_n exp(-damping dt) (exact for the layer's linear drag, so never more than v_n).
   // Returns whether the vertex is in a layer.
   bool dampInLayers(const Vec3& x, Vec3& velocity, double dt) const;
+
+ private:
+  bool clearOfMovingPlanes(const Vec3& p, const ColliderPoses& poses) const;
+  bool firstHitMoving(const Vec3& from, const Vec3& to, ContactHit& hit, const ColliderPoses& poses, bool atEnd) const;
 };
 
 // Velocity after an impact with a surface of unit normal n (restitution along n, Coulomb

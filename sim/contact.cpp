@@ -98,7 +98,7 @@ bool BodyContacts::needed(const Model& model) {
   if (taking >= 2) return true;
   if (taking == 0) return false;
   for (const TriangleCollider& c : model.colliders.meshes) {
-    if (!sharpEdges(c.mesh).empty()) return true;
+    if (!c.motion.moves() && !sharpEdges(c.mesh).empty()) return true;
   }
   return false;
 }
@@ -107,6 +107,9 @@ void BodyContacts::addStatics() {
   const Model& model = *model_;
   for (uint32_t c = 0; c < model.colliders.meshes.size(); ++c) {
     const TriangleCollider& collider = model.colliders.meshes[c];
+    // A moving mesh's edges are not among the still primitives: its triangles stop the vertices
+    // that meet them (sim/colliders.h), and its edges meet a body's only there.
+    if (collider.motion.moves()) continue;
     Static s;
     s.collider = c;
     s.friction = collider.material.friction;

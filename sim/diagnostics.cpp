@@ -66,6 +66,12 @@ BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const
   const uint32_t chunks = volumeChunkCount(info);
   std::vector<double> chunkSum(chunks);
   std::vector<RegionSums> sums(regions);
+  // The moving planes where they are now.
+  std::vector<Pose> planePoses;
+  if (model.colliders.moving()) {
+    for (const PlaneCollider& pl : model.colliders.planes) planePoses.push_back(pl.motion.pose(world.time()));
+  }
+  const Pose* poses = planePoses.empty() ? nullptr : planePoses.data();
   world.parallelFor(regions, [&](std::size_t first, std::size_t last) {
     for (std::size_t r = first; r < last; ++r) {
       RegionSums m;  // a local, so that the running sums stay in registers
@@ -83,7 +89,7 @@ BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const
         m.gravitational -= mi * dot(model.gravity, x[i]);
         m.lo = componentMin(m.lo, x[i]);
         m.hi = componentMax(m.hi, x[i]);
-        m.penetration = std::max(m.penetration, model.colliders.planePenetration(x[i]));
+        m.penetration = std::max(m.penetration, model.colliders.planePenetration(x[i], poses));
       }
       for (uint32_t i = begin; i < end; ++i) {
         const double mi = model.mass[i];

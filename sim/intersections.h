@@ -26,6 +26,20 @@ struct Intersection {
 // (the count stops there).
 std::vector<Intersection> findIntersections(const Model& model, const std::vector<Vec3>& x, std::size_t limit = 64);
 
+// A body's face and a collider mesh's triangle that cross (the audit against colliders): an
+// edge of one passes through the other. A body through a still or a moving collider (at its
+// pose at the time given) is caught as one through another body is.
+struct ColliderCrossing {
+  uint32_t body = 0, face = 0;          // face: global index into Model::faces
+  uint32_t collider = 0, triangle = 0;  // into Model::colliders.meshes and its mesh's triangles
+  Vec3 point;
+};
+
+// The crossings of bodies' faces with collider meshes' triangles at positions x and time t, in
+// collider, body and face order; at most `limit` of them.
+std::vector<ColliderCrossing> findColliderCrossings(const Model& model, const std::vector<Vec3>& x, double t,
+                                                    std::size_t limit = 64);
+
 // Whether the segment p q passes through the triangle (a, b, c) (its ends strictly on opposite
 // sides of the plane, the crossing inside or on the triangle); if so, where.
 bool segmentCrossesTriangle(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, const Vec3& c, Vec3& point);

@@ -341,6 +341,10 @@ void addBody(Model& model, const BodyDesc& desc) {
     }
     info.gasPressure = gasPressureFromPeriod(model, info, desc.volumePeriod);
   }
+  if (desc.pinMotion.moves() || std::isfinite(desc.pinRelease)) {
+    if (desc.pinned.empty()) throw Error(where(desc) + ": pin_motion and pin_release need pinned vertices (pin = [...])");
+    model.pinTracks.push_back({static_cast<uint32_t>(model.bodies.size()), desc.pinMotion, desc.pinRelease});
+  }
   model.bodies.push_back(info);
 }
 

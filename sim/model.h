@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -118,6 +119,11 @@ struct BodyDesc {
   std::optional<double> stretchPeriod, bendPeriod;  // P_stretch, P_bend [s]; bendPeriod 0: no hinges
   double deformationDecay = kDefaultDeformationDecay;  // [s]
   std::vector<uint32_t> pinned;  // body-local vertex indices held fixed in place
+  // The pins move on their own: each pinned vertex is where the motion takes its rest position
+  // (a frame carrying a cape, a hand holding a cloth); until `pinRelease` [s], then free (at the
+  // velocity the motion gave it). No motion and an infinite release: held in place for good.
+  Movement pinMotion;
+  double pinRelease = std::numeric_limits<double>::infinity();
   // Contact with other bodies (sim/contact.h) and within itself; the thickness [m] (0: a tenth
   // of the mean edge length), the Coulomb friction coefficient and the restitution of impacts.
   bool contact = true;
@@ -191,6 +197,13 @@ struct Model {
   std::vector<Triangle> faces;  // global vertex indices, outward-oriented
   std::vector<BodyInfo> bodies;
   std::vector<uint32_t> pinned;  // global indices
+  // A body whose pins move or are released (BodyDesc::pinMotion, pinRelease).
+  struct PinTrack {
+    uint32_t body = 0;
+    Movement motion;  // may not move: pins that are only released
+    double release = std::numeric_limits<double>::infinity();
+  };
+  std::vector<PinTrack> pinTracks;
   // Initial state.
   std::vector<Vec3> initialVelocity;
   // Environment.

@@ -91,8 +91,11 @@ double landingStep(const World& world, uint32_t body, double tolerance) {
 
 Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
   const Model& model = world.model();
-  // With wind, energy is injected from outside: the energy check would be meaningless.
-  checkEnergy_ = !model.wind.has_value();
+  // With wind, colliders that move or pins that follow a track, energy is injected from outside:
+  // the energy check would be meaningless.
+  bool drivenPins = false;
+  for (const Model::PinTrack& track : model.pinTracks) drivenPins = drivenPins || track.motion.moves();
+  checkEnergy_ = !model.wind.has_value() && !model.colliders.moving() && !drivenPins;
   lowestBased_ = limits_.energyFromLowest && !energySwings(world.integrator());
   g_ = length(model.gravity);
   up_ = upOf(model);
@@ -280,6 +283,24 @@ std::optional<Failure> Monitor::check(const World& world) {
                      describe(world, c.bodyA, s.str(),
                               "The contact let it through: try a smaller dt or more substeps (--substeps), or a larger "
                               "contact_thickness; if dt is sane, please report the scene.")};
+    }
+  }
+  // Bodies through a collider mesh, still or moving: its contact stops vertices, and an edge
+  // that passes through a triangle (or a triangle's edge through a face) is caught here.
+  if (!model.colliders.meshes.empty()) {
+    const std::vector<ColliderCrossing> crossing = findColliderCrossings(model, world.positions(), world.time(), 1);
+    if (!crossing.empty()) {
+      const ColliderCrossing& c = crossing[0];
+      const BodyInfo& a = model.bodies[c.body];
+      std::ostringstream s;
+      s << "it passes through collider '" << model.colliders.meshes[c.collider].name << "': its face "
+        << c.face - a.firstFace << " and the collider's triangle " << c.triangle << " cross at (" << c.point.x
+        << ", " << c.point.y << ", " << c.point.z << ")";
+      return Failure{c.body, world.stepCount(), world.time(),
+                     describe(world, c.body, s.str(),
+                              "The contact let it through: try a smaller dt or more substeps (--substeps), a larger "
+                              "contact_thickness, or a finer body mesh (a coarse one drapes over a collider's edges "
+                              "and corners with its faces, which only its vertices are kept off)")};
     }
   }
   return std::nullopt;

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "sim/error.h"
 #include "sim/implicit.h"
 #include "sim/stability.h"
 
@@ -81,12 +82,33 @@ World::World(Model model, Integrator integrator, double dt)
     if (tc.nodes.empty()) tc.buildBvh();
   }
   dampingLayers_ = model_->colliders.dampingLayers();
+  movingColliders_ = model_->colliders.moving();
+  if (movingColliders_) {
+    if (integrator == Integrator::BackwardEuler) {
+      throw Error("colliders that move are not supported with backward_euler (its solve holds the colliders "
+                  "still); use rk4, verlet or an adaptive step (--tolerance)");
+    }
+    kinks_ = model_->colliders.kinks();
+  }
+  for (const Model::PinTrack& track : model_->pinTracks) {
+    TrackedPins& t = tracked_.emplace_back();
+    t.track = &track;
+    for (uint32_t i : model_->pinned) {
+      if (model_->body[i] == track.body) t.vertices.push_back(i);
+    }
+    for (uint32_t i : t.vertices) t.rest.push_back(model_->restPosition[i]);
+    for (double k : track.motion.kinks()) kinks_.push_back(k);
+    if (std::isfinite(track.release)) kinks_.push_back(track.release);
+  }
+  std::sort(kinks_.begin(), kinks_.end());
+  kinks_.erase(std::unique(kinks_.begin(), kinks_.end()), kinks_.end());
   forces_ = std::make_unique<Forces>(*model_);
   if (BodyContacts::needed(*model_)) contacts_ = std::make_unique<BodyContacts>(*model_);
 
   const std::size_t n = model_->vertexCount();
   x_ = model_->restPosition;
   v_ = model_->initialVelocity;
+  followPins();
   for (auto* buffer : {&xOld_, &a_}) buffer->assign(n, Vec3{});
   if (!model_->colliders.empty()) sinceContact_.assign(n, 0xFFFF);
   restingSteps_ = static_cast<int>(std::ceil(model_->colliders.restingWindow / dt_));
@@ -180,6 +202,8 @@ void World::step() {
     Vec3 *x = x_.data(), *xOld = xOld_.data();
     forVertices([&](std::size_t begin, std::size_t end) { std::copy(x + begin, x + end, xOld + begin); });
   }
+  // The moving colliders over the step (the adaptive step sets them for each size it tries).
+  if (movingColliders_ && !adaptive()) model_->colliders.posesOver(time_, time_ + dt_, poses_);
   // Integrate; every integrator's last pass over the vertices resolves their contacts too.
   switch (integrator_) {
     case Integrator::ExplicitEuler: stepExplicitEuler(); break;
@@ -214,8 +238,31 @@ void World::step() {
       }
     }
   }
-  time_ = adaptive() && landed_ ? stop_ : time_ + dt_;
+  time_ = adaptive() && landed_ ? landAt_ : time_ + dt_;
   ++steps_;
+  if (!tracked_.empty()) followPins();
+}
+
+void World::followPins() {
+  for (TrackedPins& t : tracked_) {
+    if (t.released) continue;
+    const Model::PinTrack& track = *t.track;
+    if (time_ >= track.release) {
+      // Free from now on, at the velocity the motion gave them.
+      for (uint32_t i : t.vertices) model_->invMass[i] = 1.0 / model_->mass[i];
+      t.released = true;
+      cachedAccelerationValid_ = false;
+      continue;
+    }
+    if (!track.motion.moves()) continue;
+    const Pose pose = track.motion.pose(time_);
+    for (std::size_t k = 0; k < t.vertices.size(); ++k) {
+      const uint32_t i = t.vertices[k];
+      x_[i] = pose.apply(t.rest[k]);
+      v_[i] = track.motion.velocityAt(x_[i], time_);
+    }
+    cachedAccelerationValid_ = false;
+  }
 }
 
 void World::stepExplicitEuler() {
@@ -351,8 +398,13 @@ bool World::chooseStep(double& h, double& wanted) {
   wanted = std::min(hNext_, stableStep_);
   h = wanted;
   landed_ = false;
-  if (stop_ > t) {
-    const double left = stop_ - t;
+  landAt_ = stop_;
+  // A moving collider's keyframe ahead, before the stop, is landed on too (its velocity or
+  // acceleration jumps there).
+  const auto kink = std::upper_bound(kinks_.begin(), kinks_.end(), t);
+  if (kink != kinks_.end() && (!(stop_ > t) || *kink < stop_)) landAt_ = *kink;
+  if (landAt_ > t) {
+    const double left = landAt_ - t;
     if (h >= left) {
       h = left;
       landed_ = true;
@@ -420,6 +472,7 @@ void World::stepBogackiShampine() {
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
     if (!chooseStep(h, wanted)) return;
+    if (movingColliders_) model_->colliders.posesOver(time_, time_ + h, poses_);
     const auto stage = [&](double c, const Vec3* kx, const Vec3* kv, Vec3* nextKx) {
       forVertices([&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
@@ -466,6 +519,7 @@ void World::stepAdaptiveVerlet() {
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
     if (!chooseStep(h, wanted)) return;
+    if (movingColliders_) model_->colliders.posesOver(time_, time_ + h, poses_);
     std::atomic<double> impactWorst{0.0};
     forVertices([&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
@@ -508,15 +562,16 @@ double World::collideCandidate(std::size_t begin, std::size_t end, double h) {
   const Vec3* x = x_.data();
   Vec3 *xn = xn_.data(), *vs = vs_.data();
   const double* inv = invScale_.data();
+  const ColliderPoses* moving = poses();
   double worst = 0.0;
   for (std::size_t i = begin; i < end; ++i) {
     candidateHit_[i] = 0;
     if (model_->invMass[i] == 0.0) continue;  // pinned
-    if (!colliders.clearAt(xn[i])) {
+    if (!colliders.clearAt(xn[i], moving)) {
       const Vec3 before = vs[i];
       const bool resting = restingAt(i);
       ContactHit first;
-      if (colliders.resolve(x[i], xn[i], vs[i], resting, &first)) {
+      if (colliders.resolve(x[i], xn[i], vs[i], resting, &first, moving)) {
         candidateHit_[i] = 1;
         worst = std::max(worst, impactMisplacement(before, first, resting, h) * inv[i]);
       }
@@ -557,8 +612,9 @@ void World::accept(double h, double wanted, double factor, double error, bool af
 }
 
 double World::impactMisplacement(const Vec3& velocity, const ContactHit& hit, bool resting, double h) const {
-  const Vec3 after = contactVelocity(velocity, hit.normal, hit.material, model_->colliders.restingSpeed, resting);
-  return length(after - velocity) * (1.0 - hit.fraction) * h;
+  const Vec3 relative = velocity - hit.surfaceVelocity;  // zero for a still collider
+  const Vec3 after = contactVelocity(relative, hit.normal, hit.material, model_->colliders.restingSpeed, resting);
+  return length(after - relative) * (1.0 - hit.fraction) * h;
 }
 
 double World::impactError(double h) const {
@@ -573,9 +629,9 @@ double World::impactError(double h) const {
   std::atomic<double> worst{0.0};
   forVertices([&](std::size_t begin, std::size_t end) {
     foldLargest(worst, largestOver(begin, end, [&](std::size_t i) {
-                  if (model_->invMass[i] == 0.0 || colliders.clearAt(xn[i])) return 0.0;
+                  if (model_->invMass[i] == 0.0 || colliders.clearAt(xn[i], poses())) return 0.0;
                   ContactHit hit;
-                  if (!colliders.firstHit(x[i], xn[i], hit)) return 0.0;
+                  if (!colliders.firstHit(x[i], xn[i], hit, poses())) return 0.0;
                   return impactMisplacement(vn[i], hit, restingAt(i), h) * inv[i];
                 }));
   });
@@ -623,7 +679,8 @@ bool World::collide(std::size_t begin, std::size_t end, Vec3* velocity) {
   bool hitAny = false;
   for (std::size_t i = begin; i < end; ++i) {
     if (model_->invMass[i] == 0.0) continue;  // pinned
-    const bool hit = !colliders.clearAt(x_[i]) && colliders.resolve(xOld_[i], x_[i], velocity[i], restingAt(i));
+    const bool hit = !colliders.clearAt(x_[i], poses()) &&
+                     colliders.resolve(xOld_[i], x_[i], velocity[i], restingAt(i), nullptr, poses());
     bookContact(i, hit);
     const bool damped = layers && colliders.dampInLayers(x_[i], velocity[i], dt_);
     hitAny = hitAny || hit || damped;

@@ -268,7 +268,24 @@ class World {
   double modeStep_ = 0.0;                // the step it allows [s]
   double boundAtMode_ = 0.0;             // Gershgorin's step when it was found [s]
   int sinceMode_ = 0;                    // bound updates since
-  bool landed_ = false;                  // the step in progress lands on stop_
+  bool landed_ = false;                  // the step in progress lands on landAt_
+  double landAt_ = 0.0;                  // stop_, or a moving collider's keyframe before it
+  // Colliders that move on their own: their poses over the step being taken, and the
+  // keyframe times the adaptive step lands on.
+  bool movingColliders_ = false;
+  ColliderPoses poses_;
+  std::vector<double> kinks_;
+  const ColliderPoses* poses() const { return movingColliders_ ? &poses_ : nullptr; }
+  // Pins that move or are released (Model::pinTracks): their vertices and rest positions.
+  struct TrackedPins {
+    const Model::PinTrack* track = nullptr;
+    std::vector<uint32_t> vertices;
+    std::vector<Vec3> rest;
+    bool released = false;
+  };
+  std::vector<TrackedPins> tracked_;
+  // Puts the tracked pins where their motion has them at time_ (and frees those due).
+  void followPins();
   std::vector<double> invScale_;         // per vertex: 1 / (tolerance x its body's rest size)
   std::vector<double> lastContactTime_;  // per vertex: when it last touched a static collider
   std::vector<Vec3> xn_, vn_, vBefore_;  // a step's candidate state; velocities before contact

@@ -103,8 +103,9 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
     if (!look.visible) continue;
     const glm::vec3 c = toGlm(look.material.color);
     // Two tones of the plane's colour make the checker that shows depth.
-    renderer_.addGround(toGlm(plane.point), toGlm(plane.normal), static_cast<float>(look.extent), c * 1.12f, c * 0.88f,
-                        2.0f);
+    const render::MeshId id = renderer_.addGround(toGlm(plane.point), toGlm(plane.normal),
+                                                  static_cast<float>(look.extent), c * 1.12f, c * 0.88f, 2.0f);
+    if (plane.motion.moves()) movingPlanes_.push_back({id, p});
   }
   for (std::size_t c = 0; c < scene.triangleColliders.size(); ++c) {
     const TriMesh& m = scene.triangleColliders[c].mesh;
@@ -117,13 +118,24 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
       for (int k = 0; k < 3; ++k) xyz.push_back(static_cast<float>(p[k]));
     }
     for (const Triangle& tri : m.triangles) indices.insert(indices.end(), tri.begin(), tri.end());
-    renderer_.addStaticMesh(xyz, indices, toMaterial(look.material));
+    if (scene.triangleColliders[c].motion.moves()) {
+      // Drawn where its motion has it at each frame, as given (a rigid plate, not a soft patch).
+      movingMeshes_.push_back({renderer_.addDynamicMesh(m.positions.size(), indices, toMaterial(look.material), false), c});
+    } else {
+      renderer_.addStaticMesh(xyz, indices, toMaterial(look.material));
+    }
   }
   for (const PropDesc& p : scene.view.props) {
     const render::MeshData mesh = p.shape == PropDesc::Shape::Box
                                       ? render::makeBox(toGlm(p.center), toGlm(p.size) * 0.5f)
                                       : render::makeCylinder(toGlm(p.from), toGlm(p.to), static_cast<float>(p.radius));
-    renderer_.addStaticMesh(mesh, toMaterial(p.material));
+    if (p.motion.moves()) {
+      movingProps_.push_back({renderer_.addDynamicMesh(mesh.positions.size() / 3, mesh.indices, toMaterial(p.material), false),
+                              static_cast<std::size_t>(&p - scene.view.props.data())});
+      propRest_.push_back(mesh.positions);
+    } else {
+      renderer_.addStaticMesh(mesh, toMaterial(p.material));
+    }
   }
   // Camera: the scene's, or one that frames everything that moves or collides.
   render::Camera camera;
@@ -187,6 +199,7 @@ void SceneView::draw(const FrameSnapshot& snapshot) {
     }
     offset += n;
   }
+  placeMovingColliders(snapshot.time);
   if (scene_.view.render.overlay) {
     char time[64], method[96];
     std::snprintf(time, sizeof time, "t = %.2f s", snapshot.time);
@@ -194,6 +207,33 @@ void SceneView::draw(const FrameSnapshot& snapshot) {
     renderer_.setOverlayText({scene_.name, time, method});
   }
   renderer_.render();
+}
+
+void SceneView::placeMovingColliders(double t) {
+  for (const Moving& m : movingPlanes_) {
+    const PlaneCollider& plane = scene_.planes[m.index];
+    const Pose pose = plane.motion.pose(t);
+    const glm::mat3 rotation(toGlm(pose.rx), toGlm(pose.ry), toGlm(pose.rz));  // columns
+    renderer_.placeGround(m.id, toGlm(pose.apply(plane.point)), rotation);
+  }
+  const auto place = [&](render::MeshId id, const Pose& pose, std::size_t count, auto&& point) {
+    placed_.clear();
+    for (std::size_t k = 0; k < count; ++k) {
+      const Vec3 x = pose.apply(point(k));
+      placed_.insert(placed_.end(), {static_cast<float>(x.x), static_cast<float>(x.y), static_cast<float>(x.z)});
+    }
+    renderer_.updateDynamicMesh(id, placed_);
+  };
+  for (const Moving& m : movingMeshes_) {
+    const TriangleCollider& collider = scene_.triangleColliders[m.index];
+    place(m.id, collider.motion.pose(t), collider.mesh.positions.size(),
+          [&](std::size_t k) { return collider.mesh.positions[k]; });
+  }
+  for (std::size_t k = 0; k < movingProps_.size(); ++k) {
+    const std::vector<float>& rest = propRest_[k];
+    place(movingProps_[k].id, scene_.view.props[movingProps_[k].index].motion.pose(t), rest.size() / 3,
+          [&](std::size_t i) { return Vec3{rest[3 * i], rest[3 * i + 1], rest[3 * i + 2]}; });
+  }
 }
 
 void SceneView::draw(const World& world) {

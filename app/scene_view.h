@@ -40,6 +40,14 @@ class SceneView {
   // Per body simulated through a proxy: the user's mesh bound to it (corners as the body's
   // model-local vertex indices), drawn instead of the proxy; empty for the others.
   std::vector<Embedding> drawBindings_;
+  // Colliders that move on their own: drawn where their motion has them at the frame's time.
+  struct Moving {
+    render::MeshId id;
+    std::size_t index;  // into the scene's planes or triangle colliders
+  };
+  std::vector<Moving> movingPlanes_, movingMeshes_, movingProps_;
+  std::vector<std::vector<float>> propRest_;  // per moving prop: its mesh's positions at rest
+  void placeMovingColliders(double t);
   std::vector<float> placed_;  // scratch: a drawn mesh's positions
   std::string integrator_;
   FrameSnapshot scratch_;  // for draw(world)

@@ -48,6 +48,7 @@ struct GpuMesh {
   // Ground only:
   bool ground = false;
   glm::vec3 groundOrigin{0.0f}, groundU{1, 0, 0}, groundV{0, 0, 1}, groundB{0.5f};
+  glm::vec3 groundRestU{1, 0, 0}, groundRestV{0, 0, 1};  // the axes as added (placeGround turns them)
   float tile = 1.0f, extent = 1.0f;
 };
 
@@ -205,14 +206,14 @@ struct Renderer::Impl {
   }
 
   MeshId createMesh(std::size_t vertexCount, std::span<const std::uint32_t> tris,
-                    const Material& mat, bool dynamic) {
+                    const Material& mat, bool dynamic, bool refine = true) {
     checkTriangles(tris, vertexCount);
     GpuMesh m;
     m.vertexCount = vertexCount;
     m.indices.assign(tris.begin(), tris.end());
     m.material = mat;
     m.dynamic = dynamic;
-    if (dynamic && !mat.flat && settings.smoothSilhouettes)
+    if (dynamic && refine && !mat.flat && settings.smoothSilhouettes)
       m.refinement = PnRefinement(tris, vertexCount, PnRefinement::levelFor(tris.size() / 3));
     const std::vector<std::uint32_t>& drawn = m.refinement.active() ? m.refinement.triangles() : m.indices;
     const std::size_t drawnVertices = m.refinement.active() ? m.refinement.vertexCount() : vertexCount;
@@ -849,9 +850,9 @@ float Renderer::aspect() const {
 }
 
 MeshId Renderer::addDynamicMesh(std::size_t vertexCount, std::span<const std::uint32_t> triangles,
-                                const Material& material) {
+                                const Material& material, bool refine) {
   impl_->ctx.makeCurrent();
-  return impl_->createMesh(vertexCount, triangles, material, true);
+  return impl_->createMesh(vertexCount, triangles, material, true, refine);
 }
 
 void Renderer::updateDynamicMesh(MeshId id, std::span<const float> positions, std::span<const std::uint8_t> flat) {
@@ -884,6 +885,23 @@ MeshId Renderer::addStaticMesh(const MeshData& mesh, const Material& material) {
   return addStaticMesh(mesh.positions, mesh.indices, material);
 }
 
+namespace {
+constexpr int kGroundCells = 16;
+// A ground's grid vertices: (cells + 1)^2 points of the square through `point` spanned by u, v.
+std::vector<float> groundGrid(glm::vec3 point, glm::vec3 u, glm::vec3 v, float halfExtent) {
+  std::vector<float> positions;
+  positions.reserve(3 * (kGroundCells + 1) * (kGroundCells + 1));
+  for (int j = 0; j <= kGroundCells; ++j)
+    for (int i = 0; i <= kGroundCells; ++i) {
+      const float a = (2.0f * static_cast<float>(i) / kGroundCells - 1.0f) * halfExtent;
+      const float b = (2.0f * static_cast<float>(j) / kGroundCells - 1.0f) * halfExtent;
+      const glm::vec3 p = point + a * u + b * v;
+      positions.insert(positions.end(), {p.x, p.y, p.z});
+    }
+  return positions;
+}
+}  // namespace
+
 MeshId Renderer::addGround(glm::vec3 point, glm::vec3 normal, float halfExtent, glm::vec3 colourA,
                            glm::vec3 colourB, float tileSize) {
   if (!(halfExtent > 0.0f) || !(tileSize > 0.0f) || !(glm::length(normal) > 0.0f))
@@ -894,14 +912,8 @@ MeshId Renderer::addGround(glm::vec3 point, glm::vec3 normal, float halfExtent, 
   const glm::vec3 v = glm::cross(u, n);  // u x v = n... (u, n, v) keeps CCW seen from +n below
   // A grid rather than one quad keeps the depth interpolation and fog smooth.
   MeshData grid;
-  const int cells = 16;
-  for (int j = 0; j <= cells; ++j)
-    for (int i = 0; i <= cells; ++i) {
-      const float a = (2.0f * static_cast<float>(i) / cells - 1.0f) * halfExtent;
-      const float b = (2.0f * static_cast<float>(j) / cells - 1.0f) * halfExtent;
-      const glm::vec3 p = point + a * u + b * v;
-      grid.positions.insert(grid.positions.end(), {p.x, p.y, p.z});
-    }
+  const int cells = kGroundCells;
+  grid.positions = groundGrid(point, u, v, halfExtent);
   for (std::uint32_t j = 0; j < cells; ++j)
     for (std::uint32_t i = 0; i < cells; ++i) {
       const std::uint32_t k = j * (cells + 1) + i;
@@ -925,10 +937,22 @@ MeshId Renderer::addGround(glm::vec3 point, glm::vec3 normal, float halfExtent, 
   m.groundOrigin = point;
   m.groundU = u;
   m.groundV = v;
+  m.groundRestU = u;
+  m.groundRestV = v;
   m.groundB = colourB;
   m.tile = tileSize;
   m.extent = halfExtent;
   return id;
+}
+
+void Renderer::placeGround(MeshId id, glm::vec3 point, const glm::mat3& rotation) {
+  impl_->ctx.makeCurrent();
+  GpuMesh& m = impl_->mesh(id);
+  if (!m.ground) throw RenderError("Renderer: mesh " + std::to_string(id) + " is not a ground");
+  m.groundOrigin = point;
+  m.groundU = rotation * m.groundRestU;
+  m.groundV = rotation * m.groundRestV;
+  impl_->setPositions(m, groundGrid(point, m.groundU, m.groundV, m.extent));
 }
 
 void Renderer::setCamera(const Camera& camera) {

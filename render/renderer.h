@@ -118,8 +118,9 @@ public:
   // --- Meshes. Triangle indices: 3 per triangle, each < vertex count. Throws RenderError on
   // bad sizes or indices. Normals are smooth, area-weighted, recomputed by the renderer.
   // A soft body: topology and material once; positions each frame with updateDynamicMesh.
+  // `refine` false: drawn as given, never from a smoother surface (a rigid collider that moves).
   MeshId addDynamicMesh(std::size_t vertexCount, std::span<const std::uint32_t> triangles,
-                        const Material& material);
+                        const Material& material, bool refine = true);
   // positions: x, y, z per vertex (3 * vertexCount floats). `flat` (empty, or one per vertex):
   // nonzero where a smooth (refined) surface must stay flat, e.g. a vertex resting on a thin
   // collider wall, which a bulging patch would poke through.
@@ -134,6 +135,9 @@ public:
   MeshId addGround(glm::vec3 point, glm::vec3 normal, float halfExtent,
                    glm::vec3 colourA = {0.78f, 0.78f, 0.76f},
                    glm::vec3 colourB = {0.58f, 0.60f, 0.62f}, float tileSize = 0.5f);
+  // Moves a ground (a plane collider that moves): through `point`, its axes as added turned by
+  // `rotation`; its checker moves with it.
+  void placeGround(MeshId id, glm::vec3 point, const glm::mat3& rotation);
 
   // --- Scene.
   void setCamera(const Camera& camera);  // throws RenderError when position == target

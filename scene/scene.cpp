@@ -799,6 +799,9 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
         p.radius = r.positive("radius", p.radius);
       }
       p.material = readMaterial(r, Material{{0.45, 0.3, 0.2}, 1.0, 16.0});
+      if (const toml::table* t = r.subtable("motion")) {
+        p.motion = readMotion(*t, path, "[[prop]] #" + std::to_string(i + 1) + " motion");
+      }
       r.finish();
       scene.view.props.push_back(p);
     }

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/motion.h"
 #include "sim/setup.h"
 
 namespace springy {
@@ -58,6 +59,7 @@ struct PropDesc {
   double radius = 0.5;  // cylinder radius
   Vec3 center, size;    // box
   Material material;
+  Movement motion{};    // drawn where it takes the prop at each frame (a bar carrying pins)
 };
 
 // How a collider is drawn.

@@ -16,10 +16,23 @@ std::size_t segmentOf(const std::vector<Movement::Key>& keys, double t) {
   return std::min(std::max<std::size_t>(k, 1), keys.size() - 1) - 1;
 }
 
-// Catmull-Rom tangent at key k (non-uniform: the chord from its neighbours); zero at the ends.
+// The tangent at key k, per coordinate: Catmull-Rom's (the chord from its neighbours), made
+// monotone as Fritsch & Carlson (1980, SIAM J. Numer. Anal. 17(2)) show: zero where the path
+// turns or holds (the slopes on the two sides differ in sign or one is zero), and at most three
+// times the smaller slope, so that no segment overshoots its keys (a press held down between
+// two equal keys stays there). Zero at the ends.
 Vec3 tangentAt(const std::vector<Movement::Key>& keys, std::size_t k) {
   if (k == 0 || k + 1 >= keys.size()) return {};
-  return (keys[k + 1].offset - keys[k - 1].offset) / (keys[k + 1].time - keys[k - 1].time);
+  const Vec3 chord = (keys[k + 1].offset - keys[k - 1].offset) / (keys[k + 1].time - keys[k - 1].time);
+  const Vec3 before = (keys[k].offset - keys[k - 1].offset) / (keys[k].time - keys[k - 1].time);
+  const Vec3 after = (keys[k + 1].offset - keys[k].offset) / (keys[k + 1].time - keys[k].time);
+  Vec3 m;
+  for (int c = 0; c < 3; ++c) {
+    if (!(before[c] * after[c] > 0.0)) continue;  // a turn or a hold: flat here
+    const double limit = 3.0 * std::min(std::fabs(before[c]), std::fabs(after[c]));
+    m[c] = std::copysign(std::min(std::fabs(chord[c]), limit), chord[c]);
+  }
+  return m;
 }
 
 }  // namespace

@@ -6,7 +6,8 @@
 // with c the centre of rotation, R(t) the rotation by the angle theta(t) = omega t about a fixed
 // unit axis (Rodrigues' formula), and d(t) the translation: keyframes (t_k, d_k), held before the
 // first and after the last, linear between them or a cubic Hermite spline (Catmull-Rom tangents
-// inside, zero at the ends: it starts and stops smoothly; C1 everywhere), plus an oscillation
+// inside, made monotone so that it never overshoots a key, e.g. flat where two keys are equal;
+// zero at the ends: it starts and stops smoothly; C1 everywhere), plus an oscillation
 // A sin(2 pi f t + phi). A point moving with the thing has the velocity
 //   v = d'(t) + w x (x - c - d(t)),  w = omega axis.
 // Everything is a closed form of t: the same time gives the same bits on any thread count.

@@ -73,6 +73,22 @@ TEST(Movement, CubicKeysPassThroughEveryKeyAreC1AndStartAndStopAtRest) {
   }
 }
 
+// Cubic keys never overshoot (monotone tangents): a hold between two equal keys stays put, and
+// the path stays between the keys on each side of it.
+TEST(Movement, CubicKeysHoldBetweenEqualKeysAndNeverOvershoot) {
+  const Movement m = keyed({{0.3, {0, 0, 0}}, {1.5, {0, -0.7, 0}}, {2.2, {0, -0.7, 0}}, {3.2, {0, 0.4, 0}}}, true);
+  for (double t = 1.5; t <= 2.2; t += 0.01) EXPECT_NEAR(m.translation(t).y, -0.7, 1e-15) << t;
+  for (double t = 0.0; t <= 3.5; t += 0.005) {
+    EXPECT_GE(m.translation(t).y, -0.7 - 1e-15) << t;
+    EXPECT_LE(m.translation(t).y, 0.4) << t;
+  }
+  // Where the keys climb steadily the tangent is Catmull-Rom's: evenly spaced keys on a line
+  // are followed exactly.
+  const Movement line = keyed({{0, {0, 0, 0}}, {1, {1, 2, 0}}, {2, {2, 4, 0}}, {3, {3, 6, 0}}}, true);
+  EXPECT_NEAR(line.translation(1.5).y, 3.0, 1e-15);
+  EXPECT_NEAR(line.translationVelocity(1.5).y, 2.0, 1e-14);
+}
+
 TEST(Movement, SpinAndOscillationVelocityIsTheDerivativeOfThePose) {
   Movement m = keyed({{0.0, {0, 0, 0}}, {2.0, {1, 0.5, 0}}}, true);
   m.spin = 1.3;

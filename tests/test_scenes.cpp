@@ -376,5 +376,66 @@ TEST(Scenes, StackBunnyLandsOnTheBedOfBallsWhichStaysInTheTray) {
   EXPECT_GT(run.world.bodyContacts()->sinceStart().contacts, 0u);
 }
 
+// Press: squeezed by the plate to half its height (it bulges sideways), then released: back over
+// 90% of its volume, round again and at rest; no vertex ever above the plate's underside.
+TEST(Scenes, PressSqueezesTheBallToHalfItsHeightAndItSpringsBack) {
+  SceneRun run("press");
+  const TriangleCollider& plate = run.scene.triangleColliders[0];
+  double squeezed = 1e9;
+  run.advance(2.2, [&] {
+    const double underside = 1.2 + plate.motion.translation(run.world.time()).y;
+    for (const Vec3& x : run.world.positions()) ASSERT_LE(x.y, underside + 1e-9) << run.world.time();
+    squeezed = std::min(squeezed, run.height(0));
+  });
+  EXPECT_NEAR(squeezed, 0.5, 0.01);  // the plate's lowest: 0.5 m over the ground
+  run.advanceToEnd();
+  const BodyRecord& r = run.monitor.records()[0];
+  EXPECT_LT(r.minVolumeRatio, 0.9);  // squeezed hard
+  EXPECT_GT(r.minVolumeRatio, 0.7);
+  EXPECT_GT(run.body(0).volume / run.world.model().bodies[0].restVolume, 0.9);  // and back
+  EXPECT_NEAR(run.height(0), 1.0, 0.03);  // round again (1 m across), sagging a little
+  EXPECT_TRUE(run.restsAtEnd(0));
+}
+
+// Shaker: the jelly rides the shaking plate: its lowest vertex on the plate at every frame, its
+// volume kept; it creeps along +x (a vibratory conveyor, scenes/shaker.toml) but stays near the
+// plate's middle.
+TEST(Scenes, ShakerJellyRidesTheShakingPlate) {
+  SceneRun run("shaker");
+  const Movement& motion = run.scene.triangleColliders[0].motion;
+  const Vec3 start = run.body(0).centroid;
+  double farthest = 0.0;
+  run.advance(run.scene.duration, [&] {
+    const Vec3 d = motion.translation(run.world.time());
+    if (run.world.time() > 0.5) {
+      EXPECT_NEAR(run.lowest(0), d.y, 0.005) << run.world.time();
+    }
+    const Vec3 c = run.body(0).centroid;
+    farthest = std::max(farthest, std::hypot(c.x - d.x - start.x, c.z - d.z - start.z));
+  });
+  EXPECT_LT(farthest, 0.4);  // relative to the plate: it creeps, far from the rim (1.2 m)
+  EXPECT_GT(run.monitor.records()[0].minVolumeRatio, 0.85);
+}
+
+// Cape: the pinned edge goes round with the bar; the turn swings the cape out; let go, it flies
+// off and comes to rest on the ground.
+TEST(Scenes, CapeSwingsOutOnItsTurningBarAndLandsWhenLetGo) {
+  SceneRun run("cape");
+  const Model& model = run.world.model();
+  const Movement& motion = run.scene.bodies[0].pinMotion;
+  double outward = 0.0;  // the largest distance of a vertex from the axis
+  run.advance(3.9, [&] {
+    for (uint32_t i : model.pinned) {
+      ASSERT_LT(length(run.world.positions()[i] - motion.pose(run.world.time()).apply(model.restPosition[i])), 1e-9);
+    }
+    for (const Vec3& x : run.world.positions()) outward = std::max(outward, std::hypot(x.x, x.z));
+  });
+  EXPECT_GT(outward, 1.2 + 0.3);  // swung out well past the bar's 1.2 m (at rest: 1.3 m at a corner)
+  run.advanceToEnd();
+  EXPECT_LT(run.lowest(0), 0.01);
+  EXPECT_LT(run.height(0), 0.1);  // lying on the ground
+  EXPECT_TRUE(run.restsAtEnd(0));
+}
+
 }  // namespace
 }  // namespace springy

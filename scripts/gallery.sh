@@ -26,6 +26,9 @@ declare -A times=(
   [stack]=0,0.6,1.5,12
   [drape]=0.3,0.5,1.2,5
   [flag]=1,4,16,20
+  [press]=0,1.5,2.2,8
+  [shaker]=0,1.1,2.3,6
+  [cape]=0,1.25,4.3,7
 )
 for scene in "${!times[@]}"; do
   "$springy" frames "scenes/$scene.toml" -o "$out" --sheet-only --width 384 --height 216 \

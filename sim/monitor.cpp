@@ -217,6 +217,11 @@ std::optional<Failure> Monitor::check(const World& world) {
                                 "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
                                 "strut_period, or the body material (scenes/README.md), which means the same at "
                                 "every resolution.");
+        if (ratio <= 0.0 && !info.selfContact) {
+          // Inside out: a crush folded it through itself, which its own contact would stop.
+          failure.message += " It turned inside out: with self_contact = true its own faces stop it folding through "
+                             "itself (docs/model.md section 19; it costs run time).";
+        }
         failure.criterion = true;
         return failure;
       }

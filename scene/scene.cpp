@@ -344,6 +344,73 @@ Movement readMotion(const toml::table& table, const std::string& path, const std
   return m;
 }
 
+// The mesh vertex nearest p (the lowest index among equals).
+uint32_t nearestVertex(const std::vector<Vec3>& x, const Vec3& p) {
+  double best = std::numeric_limits<double>::infinity();
+  uint32_t bestIndex = 0;
+  for (uint32_t i = 0; i < x.size(); ++i) {
+    const double d = lengthSquared(x[i] - p);
+    if (d < best) best = d, bestIndex = i;
+  }
+  return bestIndex;
+}
+
+// [[attach]]: vertices of a body held to another body or to a [[triangles]] collider.
+//   body = "NAME", points = [[x, y, z], ...] (the body's vertices nearest them), to = "NAME",
+//   period = P [s] (a soft spring; none: hard, to a collider only), decay = T [s], release = t [s]
+AttachDesc readAttach(const toml::table& table, const std::string& path, std::size_t index, const SceneDesc& scene) {
+  Reader r(table, path, "[[attach]] #" + std::to_string(index + 1));
+  AttachDesc a;
+  a.where = location(path, table.source());
+  const auto names = [&] {
+    std::string list;
+    for (const BodyDesc& b : scene.bodies) list += (list.empty() ? "'" : ", '") + b.name + "'";
+    for (const TriangleCollider& c : scene.triangleColliders) list += (list.empty() ? "'" : ", '") + c.name + "'";
+    return list.empty() ? std::string("none") : list;
+  };
+  const toml::node* bodyNode = r.get("body");
+  if (!bodyNode || !bodyNode->as_string()) r.failHere("needs body = \"NAME\": the body whose vertices are attached");
+  const std::string bodyName = bodyNode->as_string()->get();
+  const auto body = std::find_if(scene.bodies.begin(), scene.bodies.end(), [&](const BodyDesc& b) { return b.name == bodyName; });
+  if (body == scene.bodies.end()) r.fail(*bodyNode, "body", "no body is named '" + bodyName + "' (there are: " + names() + ")");
+  a.body = static_cast<uint32_t>(body - scene.bodies.begin());
+  const toml::node* toNode = r.get("to");
+  if (!toNode || !toNode->as_string()) r.failHere("needs to = \"NAME\": another body or a [[triangles]] collider");
+  const std::string toName = toNode->as_string()->get();
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+    if (scene.bodies[b].name == toName) a.toBody = static_cast<int>(b);
+  }
+  for (std::size_t c = 0; c < scene.triangleColliders.size() && a.toBody < 0; ++c) {
+    if (scene.triangleColliders[c].name == toName) a.toCollider = static_cast<int>(c);
+  }
+  if (a.toBody < 0 && a.toCollider < 0) {
+    r.fail(*toNode, "to", "nothing is named '" + toName + "' (bodies and [[triangles]] colliders: " + names() + ")");
+  }
+  if (a.toBody == static_cast<int>(a.body)) r.fail(*toNode, "to", "a body is not attached to itself");
+  const toml::node* pointsNode = r.get("points");
+  const toml::array* points = pointsNode ? pointsNode->as_array() : nullptr;
+  if (!points || points->empty()) r.failHere("needs points = [[x, y, z], ...]: the body's vertices nearest them are attached");
+  if (points->size() > kMaxPinNear) {
+    r.fail(*pointsNode, "points", std::to_string(points->size()) + " points, more than the limit of " + std::to_string(kMaxPinNear));
+  }
+  for (const toml::node& item : *points) {
+    const uint32_t v = nearestVertex(body->mesh.positions, r.asVec3(item, "points"));
+    if (std::find(a.vertices.begin(), a.vertices.end(), v) != a.vertices.end()) continue;  // once each
+    a.vertices.push_back(v);
+    if (a.toBody >= 0) a.targets.push_back(nearestVertex(scene.bodies[static_cast<std::size_t>(a.toBody)].mesh.positions, body->mesh.positions[v]));
+  }
+  if (r.has("period")) a.period = r.inRange("period", 0.0, 1e-6, 1e6);
+  a.decay = r.inRange("decay", a.period, 1e-6, 1e9);
+  if (!r.has("period") && r.has("decay")) r.failHere("decay is a soft attachment's: give its period too");
+  if (r.has("release")) a.release = r.inRange("release", 0.0, 0.0, 1e9);
+  r.finish();
+  if (a.period <= 0.0 && a.toBody >= 0) {
+    r.failHere("a hard attachment (no period) is to a [[triangles]] collider only; to body '" + toName +
+               "' give period = P [s], a soft spring");
+  }
+  return a;
+}
+
 BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t index, Material& material) {
   Reader r(table, path, "[[body]] #" + std::to_string(index + 1));
   BodyDesc b;
@@ -782,6 +849,12 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
       SurfaceLook look;
       scene.triangleColliders.push_back(readTriangleCollider(*tris->get(i)->as_table(), path, i, look));
       scene.view.triangleColliders.push_back(look);
+    }
+  }
+  if (const toml::array* attach = arrayOfTables(root, "attach", path)) {
+    top.get("attach");
+    for (std::size_t i = 0; i < attach->size(); ++i) {
+      scene.attachments.push_back(readAttach(*attach->get(i)->as_table(), path, i, scene));
     }
   }
   if (const toml::array* props = arrayOfTables(root, "prop", path)) {

@@ -343,7 +343,7 @@ void addBody(Model& model, const BodyDesc& desc) {
   }
   if (desc.pinMotion.moves() || std::isfinite(desc.pinRelease)) {
     if (desc.pinned.empty()) throw Error(where(desc) + ": pin_motion and pin_release need pinned vertices (pin = [...])");
-    model.pinTracks.push_back({static_cast<uint32_t>(model.bodies.size()), desc.pinMotion, desc.pinRelease});
+    model.pinTracks.push_back({static_cast<uint32_t>(model.bodies.size()), desc.pinMotion, desc.pinRelease, {}});
   }
   model.bodies.push_back(info);
 }

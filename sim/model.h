@@ -202,8 +202,27 @@ struct Model {
     uint32_t body = 0;
     Movement motion;  // may not move: pins that are only released
     double release = std::numeric_limits<double>::infinity();
+    // Empty: every pinned vertex of the body. Otherwise these (global) vertices only, held
+    // where they are relative to the moving thing (a hard attachment to a collider: each at
+    // pose(t) pose(0)^-1 of its rest position).
+    std::vector<uint32_t> vertices;
   };
   std::vector<PinTrack> pinTracks;
+  // A soft attachment (AttachDesc): a damped spring from a vertex to a vertex of another body, or
+  // to a point carried by a collider, until `release` [s]. Force on `vertex`, with D the vector
+  // from it to the other end and u the other end's velocity relative to it:
+  //   rest > 0: (k (|D| - rest) + d (u . D/|D|)) D/|D|;  rest 0: k D + d u
+  // and the opposite on the other vertex.
+  struct Attachment {
+    static constexpr uint32_t kNone = 0xFFFFFFFFu;
+    uint32_t vertex = 0;
+    uint32_t other = kNone;     // a vertex of another body, or
+    uint32_t collider = kNone;  // a triangle collider: the point `anchor` of it (at its rest placement)
+    Vec3 anchor;
+    double rest = 0.0, k = 0.0, d = 0.0;
+    double release = std::numeric_limits<double>::infinity();
+  };
+  std::vector<Attachment> attachments;
   // Initial state.
   std::vector<Vec3> initialVelocity;
   // Environment.

@@ -95,7 +95,9 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
   // the energy check would be meaningless.
   bool drivenPins = false;
   for (const Model::PinTrack& track : model.pinTracks) drivenPins = drivenPins || track.motion.moves();
-  checkEnergy_ = !model.wind.has_value() && !model.colliders.moving() && !drivenPins;
+  // Soft attachments store energy the measures do not count (and, to a moving collider, take
+  // it in).
+  checkEnergy_ = !model.wind.has_value() && !model.colliders.moving() && !drivenPins && model.attachments.empty();
   lowestBased_ = limits_.energyFromLowest && !energySwings(world.integrator());
   g_ = length(model.gravity);
   up_ = upOf(model);

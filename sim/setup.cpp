@@ -11,6 +11,62 @@
 
 namespace springy {
 
+namespace {
+
+// An [[attach]] table in the model: a hard one as a pin track that carries the vertices with the
+// collider's motion, a soft one as springs (Model::Attachment).
+void addAttachment(Model& model, const AttachDesc& a, const SimulationDesc& scene) {
+  const BodyInfo& info = model.bodies[a.body];
+  std::vector<uint32_t> vertices;
+  for (uint32_t v : a.vertices) vertices.push_back(info.modelVertex[v]);
+  if (a.period <= 0.0) {  // hard: to a collider only (the scene refuses a hard one to a body)
+    const TriangleCollider& c = scene.triangleColliders[static_cast<std::size_t>(a.toCollider)];
+    Model::PinTrack track{a.body, c.motion, a.release, vertices};
+    for (std::size_t k = 0; k < vertices.size(); ++k) {
+      const uint32_t v = vertices[k];
+      if (model.invMass[v] == 0.0) {
+        throw Error(a.where + ": vertex " + std::to_string(a.vertices[k]) + " of body '" + info.name +
+                    "' is pinned already; a vertex is held by one thing");
+      }
+      model.invMass[v] = 0.0;
+      model.initialVelocity[v] = c.motion.velocityAt(model.restPosition[v], 0.0);
+      model.pinned.push_back(v);
+    }
+    std::sort(model.pinned.begin(), model.pinned.end());
+    model.pinned.erase(std::unique(model.pinned.begin(), model.pinned.end()), model.pinned.end());
+    model.pinTracks.push_back(std::move(track));
+    return;
+  }
+  // The spring's period is that of the two ends on their own: k = mu omega^2 with mu the
+  // reduced mass of the pair (the vertex's mass against a collider), and its damping makes the
+  // amplitude decay as exp(-t / decay): d = 2 mu / decay.
+  const double omega = 2.0 * kPi / a.period;
+  for (std::size_t k = 0; k < vertices.size(); ++k) {
+    Model::Attachment s;
+    s.vertex = vertices[k];
+    double m = model.mass[s.vertex];
+    Vec3 end;
+    if (a.toBody >= 0) {
+      s.other = model.bodies[static_cast<std::size_t>(a.toBody)].modelVertex[a.targets[k]];
+      m = m * model.mass[s.other] / (m + model.mass[s.other]);  // the pair's reduced mass
+      end = model.restPosition[s.other];
+    } else {
+      s.collider = static_cast<uint32_t>(a.toCollider);
+      const Movement& motion = scene.triangleColliders[s.collider].motion;
+      // The point of the collider where the vertex is at the start, in the collider's rest frame.
+      s.anchor = motion.moves() ? motion.pose(0.0).inverse(model.restPosition[s.vertex]) : model.restPosition[s.vertex];
+      end = model.restPosition[s.vertex];
+    }
+    s.rest = length(end - model.restPosition[s.vertex]);
+    s.k = m * omega * omega;
+    s.d = 2.0 * m / a.decay;
+    s.release = a.release;
+    model.attachments.push_back(s);
+  }
+}
+
+}  // namespace
+
 Model buildModel(const SimulationDesc& scene) {
   Model model;
   model.gravity = scene.gravity;
@@ -79,6 +135,7 @@ Model buildModel(const SimulationDesc& scene) {
   }
   model.colliders.planes = scene.planes;
   model.colliders.meshes = scene.triangleColliders;
+  for (const AttachDesc& a : scene.attachments) addAttachment(model, a, scene);
   // Impacts slower than a few steps' worth of gravity are resting contact, not bounces: a
   // vertex on the ground gains |g| dt of speed per step and must not be launched back up.
   const double dt = stepSize(scene);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <optional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,19 @@
 #include "sim/world.h"
 
 namespace springy {
+
+// Vertices of a body attached to another body or to a triangle collider ([[attach]]).
+struct AttachDesc {
+  std::string where;                // file:line, for errors
+  uint32_t body = 0;                // into SimulationDesc::bodies
+  std::vector<uint32_t> vertices;   // the body's mesh vertices
+  int toBody = -1;                  // another body, its mesh vertex nearest each of `vertices`, or
+  std::vector<uint32_t> targets;
+  int toCollider = -1;              // a [[triangles]] collider
+  double period = 0.0;              // a soft spring's period [s] (of the vertex's mass on it); 0: hard
+  double decay = 0.0;               // its decay time [s]
+  double release = std::numeric_limits<double>::infinity();
+};
 
 struct SimulationDesc {
   std::string path;  // where it was described (error messages name it when a body has no source)
@@ -31,6 +45,7 @@ struct SimulationDesc {
   std::vector<BodyDesc> bodies;
   std::vector<PlaneCollider> planes;
   std::vector<TriangleCollider> triangleColliders;
+  std::vector<AttachDesc> attachments;
 };
 
 // The model a description builds. Throws springy::Error naming the body's source (file, line)

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <set>
 
 #include "sim/error.h"
 #include "sim/implicit.h"
@@ -90,15 +91,31 @@ World::World(Model model, Integrator integrator, double dt)
     }
     kinks_ = model_->colliders.kinks();
   }
+  // Vertices held hard to a collider ([[attach]]) follow it, not their body's pin track.
+  std::set<uint32_t> attachedHard;
+  for (const Model::PinTrack& track : model_->pinTracks) attachedHard.insert(track.vertices.begin(), track.vertices.end());
   for (const Model::PinTrack& track : model_->pinTracks) {
     TrackedPins& t = tracked_.emplace_back();
     t.track = &track;
-    for (uint32_t i : model_->pinned) {
-      if (model_->body[i] == track.body) t.vertices.push_back(i);
+    if (track.vertices.empty()) {
+      for (uint32_t i : model_->pinned) {
+        if (model_->body[i] == track.body && !attachedHard.count(i)) t.vertices.push_back(i);
+      }
+      for (uint32_t i : t.vertices) t.rest.push_back(model_->restPosition[i]);
+    } else {  // attached to a collider: kept where they are relative to it
+      t.vertices = track.vertices;
+      const Pose start = track.motion.pose(0.0);
+      for (uint32_t i : t.vertices) t.rest.push_back(track.motion.moves() ? start.inverse(model_->restPosition[i]) : model_->restPosition[i]);
     }
-    for (uint32_t i : t.vertices) t.rest.push_back(model_->restPosition[i]);
     for (double k : track.motion.kinks()) kinks_.push_back(k);
     if (std::isfinite(track.release)) kinks_.push_back(track.release);
+  }
+  for (const Model::Attachment& a : model_->attachments) {
+    if (std::isfinite(a.release)) kinks_.push_back(a.release);
+  }
+  if (!model_->attachments.empty() && integrator == Integrator::BackwardEuler) {
+    throw Error("soft attachments ([[attach]] with a period) are not supported with backward_euler (its Jacobian "
+                "does not have them); use rk4, verlet or an adaptive step (--tolerance)");
   }
   std::sort(kinks_.begin(), kinks_.end());
   kinks_.erase(std::unique(kinks_.begin(), kinks_.end()), kinks_.end());
@@ -241,6 +258,34 @@ void World::step() {
   time_ = adaptive() && landed_ ? landAt_ : time_ + dt_;
   ++steps_;
   if (!tracked_.empty()) followPins();
+}
+
+void World::addAttachments(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
+  // Serial, in the model's order: the same sums on any thread count.
+  const Model& m = *model_;
+  for (const Model::Attachment& s : m.attachments) {
+    if (t >= s.release) continue;
+    Vec3 end, endVelocity;
+    if (s.other != Model::Attachment::kNone) {
+      end = x[s.other];
+      endVelocity = v[s.other];
+    } else {
+      const Movement& motion = m.colliders.meshes[s.collider].motion;
+      end = motion.moves() ? motion.pose(t).apply(s.anchor) : s.anchor;
+      endVelocity = motion.moves() ? motion.velocityAt(end, t) : Vec3{};
+    }
+    const Vec3 d = end - x[s.vertex], u = endVelocity - v[s.vertex];
+    Vec3 f;
+    const double len = length(d);
+    if (s.rest > 0.0 && len > 0.0) {
+      const Vec3 dir = d / len;
+      f = dir * (s.k * (len - s.rest) + s.d * dot(u, dir));
+    } else {
+      f = d * s.k + u * s.d;
+    }
+    a[s.vertex] += f * m.invMass[s.vertex];
+    if (s.other != Model::Attachment::kNone) a[s.other] -= f * m.invMass[s.other];
+  }
 }
 
 void World::followPins() {

@@ -188,7 +188,10 @@ class World {
   void accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
     ++evaluations_;
     forces_->accelerations(x, v, t, a);
+    if (!model_->attachments.empty()) addAttachments(x, v, t, a);
   }
+  // Adds the soft attachments' forces (Model::attachments) to the accelerations.
+  void addAttachments(const Vec3* x, const Vec3* v, double t, Vec3* a) const;
   // Runs fn(begin, end) over [0, vertexCount) split among the threads.
   template <class F>
   void forVertices(F&& fn) const;

@@ -22,7 +22,7 @@ struct AttachDesc {
   int toBody = -1;                  // another body, its mesh vertex nearest each of `vertices`, or
   std::vector<uint32_t> targets;
   int toCollider = -1;              // a [[triangles]] collider
-  double period = 0.0;              // a soft spring's period [s] (of the vertex's mass on it); 0: hard
+  double period = 0.0;              // a soft spring's period [s] (of the pair's reduced mass on it); 0: hard
   double decay = 0.0;               // its decay time [s]
   double release = std::numeric_limits<double>::infinity();
 };

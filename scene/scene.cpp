@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "sim/error.h"
@@ -344,16 +345,34 @@ Movement readMotion(const toml::table& table, const std::string& path, const std
   return m;
 }
 
-// The mesh vertex nearest p (the lowest index among equals).
-uint32_t nearestVertex(const std::vector<Vec3>& x, const Vec3& p) {
-  double best = std::numeric_limits<double>::infinity();
-  uint32_t bestIndex = 0;
-  for (uint32_t i = 0; i < x.size(); ++i) {
-    const double d = lengthSquared(x[i] - p);
-    if (d < best) best = d, bestIndex = i;
+// The mesh vertex nearest a point (the lowest index among equals), searched outward from the
+// point's x in the vertices sorted by x: a few vertices per point instead of all of them.
+class NearestVertex {
+ public:
+  explicit NearestVertex(const std::vector<Vec3>& x) : x_(x), byX_(x.size()) {
+    for (uint32_t i = 0; i < x.size(); ++i) byX_[i] = {x[i].x, i};
+    std::sort(byX_.begin(), byX_.end());
   }
-  return bestIndex;
-}
+  uint32_t operator()(const Vec3& p) const {
+    const auto start = std::lower_bound(byX_.begin(), byX_.end(), std::pair<double, uint32_t>{p.x, 0});
+    double best = std::numeric_limits<double>::infinity();
+    uint32_t bestIndex = 0;
+    const auto consider = [&](uint32_t i) {
+      const double d = lengthSquared(x_[i] - p);
+      if (d < best || (d == best && i < bestIndex)) best = d, bestIndex = i;
+    };
+    for (auto it = start; it != byX_.end() && (it->first - p.x) * (it->first - p.x) <= best; ++it) consider(it->second);
+    for (auto it = start; it != byX_.begin() && (std::prev(it)->first - p.x) * (std::prev(it)->first - p.x) <= best;
+         --it) {
+      consider(std::prev(it)->second);
+    }
+    return bestIndex;
+  }
+
+ private:
+  const std::vector<Vec3>& x_;
+  std::vector<std::pair<double, uint32_t>> byX_;
+};
 
 // [[attach]]: vertices of a body held to another body or to a [[triangles]] collider.
 //   body = "NAME", points = [[x, y, z], ...] (the body's vertices nearest them), to = "NAME",
@@ -393,11 +412,15 @@ AttachDesc readAttach(const toml::table& table, const std::string& path, std::si
   if (points->size() > kMaxPinNear) {
     r.fail(*pointsNode, "points", std::to_string(points->size()) + " points, more than the limit of " + std::to_string(kMaxPinNear));
   }
+  const NearestVertex nearest(body->mesh.positions);
+  const std::optional<NearestVertex> nearestThere =
+      a.toBody >= 0 ? std::optional<NearestVertex>(std::in_place, scene.bodies[static_cast<std::size_t>(a.toBody)].mesh.positions)
+                    : std::nullopt;
   for (const toml::node& item : *points) {
-    const uint32_t v = nearestVertex(body->mesh.positions, r.asVec3(item, "points"));
+    const uint32_t v = nearest(r.asVec3(item, "points"));
     if (std::find(a.vertices.begin(), a.vertices.end(), v) != a.vertices.end()) continue;  // once each
     a.vertices.push_back(v);
-    if (a.toBody >= 0) a.targets.push_back(nearestVertex(scene.bodies[static_cast<std::size_t>(a.toBody)].mesh.positions, body->mesh.positions[v]));
+    if (nearestThere) a.targets.push_back((*nearestThere)(body->mesh.positions[v]));
   }
   if (r.has("period")) a.period = r.inRange("period", 0.0, 1e-6, 1e6);
   a.decay = r.inRange("decay", a.period, 1e-6, 1e9);
@@ -652,32 +675,8 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
              std::to_string(a->size()) + " points, more than the limit of " + std::to_string(kMaxPinNear) +
                  " (pin vertex indices instead)");
     }
-    // The nearest vertex (the lowest index among equals) searched outward from the point's x in
-    // the vertices sorted by x: a few vertices per point instead of all of them.
-    const std::vector<Vec3>& x = b.mesh.positions;
-    std::vector<std::pair<double, uint32_t>> byX(x.size());
-    for (uint32_t i = 0; i < x.size(); ++i) byX[i] = {x[i].x, i};
-    std::sort(byX.begin(), byX.end());
-    for (const toml::node& item : *a) {
-      const Vec3 p = r.asVec3(item, "pin_near");
-      const auto start = std::lower_bound(byX.begin(), byX.end(), std::pair<double, uint32_t>{p.x, 0});
-      double best = std::numeric_limits<double>::infinity();
-      uint32_t bestIndex = 0;
-      auto consider = [&](uint32_t i) {
-        const double d = lengthSquared(x[i] - p);
-        if (d < best || (d == best && i < bestIndex)) {
-          best = d;
-          bestIndex = i;
-        }
-      };
-      for (auto it = start; it != byX.end() && (it->first - p.x) * (it->first - p.x) <= best; ++it)
-        consider(it->second);
-      for (auto it = start; it != byX.begin() && (std::prev(it)->first - p.x) * (std::prev(it)->first - p.x) <= best;
-           --it) {
-        consider(std::prev(it)->second);
-      }
-      b.pinned.push_back(bestIndex);
-    }
+    const NearestVertex nearest(b.mesh.positions);
+    for (const toml::node& item : *a) b.pinned.push_back(nearest(r.asVec3(item, "pin_near")));
   }
   if (const toml::table* t = r.subtable("pin_motion")) {
     b.pinMotion = readMotion(*t, path, "[[body]] #" + std::to_string(index + 1) + " pin_motion");

@@ -141,6 +141,12 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     }
     scene.duration = *overrides.duration;
   }
+  if (overrides.iterations) {
+    if (*overrides.iterations < 1 || *overrides.iterations > kMaxIterations) {
+      throw Error("--iterations must be between 1 and " + std::to_string(kMaxIterations));
+    }
+    scene.iterations = *overrides.iterations;
+  }
   if (overrides.substeps) {
     if (*overrides.substeps < 1 || *overrides.substeps > kMaxSubsteps) {
       throw Error("--substeps must be between 1 and " + std::to_string(kMaxSubsteps) + " (or auto)");
@@ -170,6 +176,7 @@ std::string substepsText(int count) { return std::to_string(count) + (count == 1
 World makeWorld(const SceneDesc& scene, const RunOverrides& overrides) {
   World world(buildModel(scene), scene.integrator, stepSize(scene));
   if (world.adaptive()) world.setTolerance(scene.tolerance);
+  world.setIterations(scene.iterations);
   world.setThreads(threadCount(overrides));
   return world;
 }

@@ -18,6 +18,7 @@ struct RunOverrides {
   std::optional<double> dt, duration;
   std::optional<double> tolerance;  // --tolerance: an adaptive integrator at this tolerance
   std::optional<int> substeps;
+  std::optional<int> iterations;  // --iterations: vbd's sweeps per step
   bool autoSubsteps = false;  // --substeps auto: the stability advisor picks them
   std::optional<unsigned> threads;  // --threads (default: SPRINGY_THREADS, else every core)
   // --set KEY=VALUE: scene keys set before the scene is read (applySceneSettings).

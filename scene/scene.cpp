@@ -778,6 +778,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
       scene.tolerance = r.inRange("tolerance", scene.tolerance, 1e-12, 0.5);
       if (!isAdaptive(scene.integrator)) scene.integrator = kDefaultAdaptive;  // a tolerance asks for one
     }
+    scene.iterations = r.integer("iterations", scene.iterations, 1, kMaxIterations);
     scene.restingSpeed = r.number("resting_speed", scene.restingSpeed);
     r.finish();
   }

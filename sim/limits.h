@@ -33,6 +33,7 @@ constexpr std::uint64_t kMaxSceneVertices = 1u << 22;       // 4.2 M vertices in
 constexpr std::uint64_t kMaxAllPairsVertices = 4096;        // model = "all_pairs": 8.4 M struts
 constexpr double kMaxSteps = 1e9;                           // steps in one run (duration / (dt / substeps))
 constexpr int kMaxSubsteps = 100000;
+constexpr int kMaxIterations = 1000;  // vbd's sweeps per step ([scene] iterations, --iterations)
 constexpr int kMaxProxyVertices = 1 << 16;                  // proxy_vertices (1 << 20 took 204 s to build)
 constexpr std::size_t kMaxPinNear = 256;                    // pin_near points per body
 constexpr int kMaxClothResolution = 512;                    // shape = "cloth": quads per side

@@ -36,6 +36,7 @@ struct SimulationDesc {
   bool stepGiven = false;  // dt or substeps were given (otherwise the advisor chooses the step)
   Integrator integrator = Integrator::RK4;
   double tolerance = 1e-4;     // the adaptive integrator's (bs32): local error / body size per step
+  int iterations = 8;          // vbd's sweeps per step (VbdSolver::kDefaultIterations)
   double restingSpeed = -1.0;  // < 0: automatic (see buildModel)
   // Environment.
   Vec3 gravity{0.0, -9.81, 0.0};

@@ -48,7 +48,8 @@ State stepMode(Integrator integrator, double w2, double g, double h, State s) {
       return {s.x + h * (2.0 / 9 * k1x + 1.0 / 3 * k2x + 4.0 / 9 * k3x),
               s.v + h * (2.0 / 9 * k1v + 1.0 / 3 * k2v + 4.0 / 9 * k3v)};
     }
-    case Integrator::BackwardEuler: {
+    case Integrator::BackwardEuler:
+    case Integrator::Vbd: {  // converged, vertex block descent is backward Euler
       // (1 + h g + h^2 w2) v1 = v - h w2 x ; x1 = x + h v1
       const double v = (s.v - h * w2 * s.x) / (1 + h * g + h * h * w2);
       return {s.x + h * v, v};
@@ -142,7 +143,7 @@ double amplification(Integrator integrator, double omega, double gamma, double h
 
 double criticalStep(Integrator integrator, double omega, double gamma, double horizon) {
   const double rate = std::max(omega, gamma);
-  if (integrator == Integrator::BackwardEuler || !(rate > 0.0)) return std::numeric_limits<double>::infinity();
+  if (isImplicit(integrator) || !(rate > 0.0)) return std::numeric_limits<double>::infinity();
   // Scan upward from a surely stable step for the first unstable one, then bisect. Every method
   // but explicit Euler is stable on the mode far below 1 / rate; explicit Euler's limit from the
   // horizon can be far smaller.
@@ -270,7 +271,7 @@ BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integr
 }
 
 Integrator contactLimitedIntegrator(const Model& model, uint32_t body, Integrator integrator) {
-  if (integrator != Integrator::BackwardEuler) return integrator;
+  if (!isImplicit(integrator)) return integrator;
   // Between bodies or within one. A single body's edges against triangle colliders' edges take
   // the contact stage too (BodyContacts::needed), but only at a collider's rims: the impact case
   // (a ball onto a plate) runs backward Euler at 0.1 s.

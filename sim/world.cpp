@@ -10,6 +10,7 @@
 
 #include "sim/error.h"
 #include "sim/implicit.h"
+#include "sim/vbd.h"
 #include "sim/stability.h"
 
 namespace springy {
@@ -28,6 +29,7 @@ constexpr IntegratorEntry kIntegrators[] = {
     {Integrator::BackwardEuler, "backward_euler"},
     {Integrator::BogackiShampine, "bs32"},
     {Integrator::AdaptiveVerlet, "verlet_adaptive"},
+    {Integrator::Vbd, "vbd"},
 };
 
 // The largest of fn(i) over [begin, end) (0 for none); a NaN wins (it must stop the step).
@@ -85,9 +87,9 @@ World::World(Model model, Integrator integrator, double dt)
   dampingLayers_ = model_->colliders.dampingLayers();
   movingColliders_ = model_->colliders.moving();
   if (movingColliders_) {
-    if (integrator == Integrator::BackwardEuler) {
-      throw Error("colliders that move are not supported with backward_euler (its solve holds the colliders "
-                  "still); use rk4, verlet or an adaptive step (--tolerance)");
+    if (integrator == Integrator::BackwardEuler || integrator == Integrator::Vbd) {
+      throw Error("colliders that move are not supported with " + std::string(integratorName(integrator)) +
+                  " (its solve holds the colliders still); use rk4, verlet or an adaptive step (--tolerance)");
     }
     kinks_ = model_->colliders.kinks();
   }
@@ -113,9 +115,10 @@ World::World(Model model, Integrator integrator, double dt)
   for (const Model::Attachment& a : model_->attachments) {
     if (std::isfinite(a.release)) kinks_.push_back(a.release);
   }
-  if (!model_->attachments.empty() && integrator == Integrator::BackwardEuler) {
-    throw Error("soft attachments ([[attach]] with a period) are not supported with backward_euler (its Jacobian "
-                "does not have them); use rk4, verlet or an adaptive step (--tolerance)");
+  if (!model_->attachments.empty() && (integrator == Integrator::BackwardEuler || integrator == Integrator::Vbd)) {
+    throw Error("soft attachments ([[attach]] with a period) are not supported with " +
+                std::string(integratorName(integrator)) +
+                " (its solve does not have them); use rk4, verlet or an adaptive step (--tolerance)");
   }
   std::sort(kinks_.begin(), kinks_.end());
   kinks_.erase(std::unique(kinks_.begin(), kinks_.end()), kinks_.end());
@@ -135,6 +138,7 @@ World::World(Model model, Integrator integrator, double dt)
   if (integrator_ == Integrator::VelocityVerlet || integrator_ == Integrator::Leapfrog) vs_.assign(n, Vec3{});
   if (integrator_ == Integrator::VelocityVerlet) aNext_.assign(n, Vec3{});
   if (integrator_ == Integrator::BackwardEuler) implicit_ = std::make_unique<ImplicitSolver>(*model_);
+  if (integrator_ == Integrator::Vbd) vbd_ = std::make_unique<VbdSolver>(*model_);
   if (integrator_ == Integrator::BogackiShampine) {
     for (auto* buffer : {&k2x_, &k3x_, &k3v_, &xs_}) buffer->assign(n, Vec3{});
   }
@@ -231,6 +235,7 @@ void World::step() {
     case Integrator::BackwardEuler: stepBackwardEuler(); break;
     case Integrator::BogackiShampine: stepBogackiShampine(); break;
     case Integrator::AdaptiveVerlet: stepAdaptiveVerlet(); break;
+    case Integrator::Vbd: stepVbd(); break;
   }
   if (!stepProblem_.empty()) return;  // the adaptive step found no step it could take
   // Contact between and within bodies, over the whole step's paths.
@@ -434,6 +439,15 @@ void World::stepRK4() {
 void World::stepBackwardEuler() {
   implicit_->step(*forces_, x_, v_, time_, dt_);
   if (!model_->colliders.empty()) lastPass([](std::size_t) {});  // the static colliders' pass
+}
+
+void World::stepVbd() {
+  vbd_->step(*forces_, x_, v_, time_, dt_);
+  if (!model_->colliders.empty()) lastPass([](std::size_t) {});  // restitution and friction
+}
+
+void World::setIterations(int iterations) {
+  if (vbd_) vbd_->setIterations(iterations);
 }
 
 bool World::chooseStep(double& h, double& wanted) {

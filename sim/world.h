@@ -43,6 +43,7 @@ enum class Integrator {
   BackwardEuler,    // implicit: Newton + CG on M dv = h f(x + h v1, v1)     order 1 (sim/implicit.h)
   BogackiShampine,  // adaptive: embedded 3(2) pair, step chosen by a tolerance order 3, 3 evals/step
   AdaptiveVerlet,   // adaptive: velocity Verlet, error from a1 - a0              order 2, 1 eval/step
+  Vbd,              // implicit: vertex block descent on backward Euler's potential  order 1 (sim/vbd.h)
 };
 
 // The adaptive integrator's step statistics (World::stepStats).
@@ -57,6 +58,9 @@ struct StepStats {
 // a tolerance alone selects.
 inline bool isAdaptive(Integrator i) { return i == Integrator::BogackiShampine || i == Integrator::AdaptiveVerlet; }
 constexpr Integrator kDefaultAdaptive = Integrator::AdaptiveVerlet;
+
+// The integrators that solve for the step's end (no stability limit on the step).
+inline bool isImplicit(Integrator i) { return i == Integrator::BackwardEuler || i == Integrator::Vbd; }
 
 // The symplectic integrators: at a stable step their energy is bounded but, read at an instant,
 // swings about its conserved value by up to 1/(1 - (omega h)^2/4) of a mode's (5 times at
@@ -76,6 +80,7 @@ std::string integratorNames();
 
 
 class ImplicitSolver;
+class VbdSolver;
 class ModeEstimator;
 
 class World {
@@ -166,6 +171,9 @@ class World {
   bool collides() const { return !model_->colliders.empty(); }
   // The backward Euler solver (its statistics), or null for the explicit integrators.
   const ImplicitSolver* implicitSolver() const { return implicit_.get(); }
+  // The vertex block descent solver (its sweeps per step: setIterations), or null.
+  const VbdSolver* vbdSolver() const { return vbd_.get(); }
+  void setIterations(int iterations);
   // The contact stage between and within bodies, or null when the scene needs none.
   const BodyContacts* bodyContacts() const { return contacts_.get(); }
   BodyContacts* bodyContacts() { return contacts_.get(); }
@@ -224,6 +232,7 @@ class World {
   void stepLeapfrog();
   void stepRK4();
   void stepBackwardEuler();
+  void stepVbd();
   void stepBogackiShampine();
   void stepAdaptiveVerlet();
   // The adaptive steps' shared parts: the next step to try (false: none is long enough, the
@@ -296,6 +305,7 @@ class World {
   StepStats stats_;
   std::string stepProblem_;
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
+  std::unique_ptr<VbdSolver> vbd_;            // the vertex block descent integrator's
   std::unique_ptr<Forces> forces_;          // the force stages, their scratch and the threads
   std::unique_ptr<BodyContacts> contacts_;  // null: no contact between or within bodies
 };

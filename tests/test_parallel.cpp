@@ -81,7 +81,7 @@ class ThreadCounts : public ::testing::TestWithParam<Integrator> {};
 TEST_P(ThreadCounts, GiveBitIdenticalStates) {
   // 0.4 s: the ball hits the plate and the plane; the implicit integrator (slower per step)
   // runs 0.15 s, which includes the first contact.
-  const int steps = GetParam() == Integrator::BackwardEuler ? 150 : 400;
+  const int steps = isImplicit(GetParam()) ? 150 : 400;
   World reference = makeWorld(GetParam(), 1);
   ASSERT_EQ(reference.threads(), 1u);
   for (int s = 0; s < steps; ++s) reference.step();
@@ -99,7 +99,7 @@ TEST_P(ThreadCounts, GiveBitIdenticalStates) {
 INSTANTIATE_TEST_SUITE_P(Integrators, ThreadCounts,
                          ::testing::Values(Integrator::ExplicitEuler, Integrator::SymplecticEuler,
                                            Integrator::VelocityVerlet, Integrator::Leapfrog, Integrator::RK4,
-                                           Integrator::BackwardEuler),
+                                           Integrator::BackwardEuler, Integrator::Vbd),
                          [](const auto& param) { return std::string(integratorName(param.param)); });
 
 TEST(ThreadSplit, ForcesEqualTheOneThreadedSumExactly) {

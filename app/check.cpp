@@ -20,6 +20,7 @@
 #include "app/runner.h"
 #include "sim/error.h"
 #include "sim/implicit.h"
+#include "sim/vbd.h"
 #include "sim/trajectory.h"
 
 namespace springy {
@@ -257,6 +258,12 @@ int runCheck(const CheckOptions& options) {
                   static_cast<double>(st.newtonIterations) / steps, static_cast<double>(st.cgIterations) / steps,
                   static_cast<unsigned long long>(st.contactConstraints),
                   static_cast<unsigned long long>(st.halvedSteps), static_cast<unsigned long long>(st.unconvergedSteps));
+    }
+    if (const VbdSolver* solver = world.vbdSolver()) {
+      const VbdStats& st = solver->stats();
+      std::printf("  vbd: %d sweeps a step over %zu colours, %llu contacts in the solve (%llu ending on a surface)\n",
+                  solver->iterations(), solver->colours(), static_cast<unsigned long long>(st.contactConstraints),
+                  static_cast<unsigned long long>(st.activeConstraints));
     }
     if (const BodyContacts* contacts = world.bodyContacts()) {
       const ContactStats& st = contacts->sinceStart();

@@ -32,11 +32,16 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
     path.times.push_back(world.time());
     path.centroid.emplace_back();
     path.volume.emplace_back();
+    double energy = 0.0, kinetic = 0.0;
     for (uint32_t b = 0; b < model.bodies.size(); ++b) {
       const BodyMeasures m = measureBody(world, b);
       path.centroid.back().push_back(m.centroid);
       path.volume.back().push_back(m.volume);
+      energy += m.total();
+      kinetic += m.kinetic;
     }
+    path.energy.push_back(energy);
+    path.kinetic.push_back(kinetic);
   };
   sample();
   double seconds = 0.0;
@@ -91,6 +96,11 @@ PathError pathError(const Model& model, const RunPath& reference, const RunPath&
     out.endPosition =
         std::max(out.endPosition, length(run.centroid[frames - 1][b] - reference.centroid[frames - 1][b]) / size);
     if (lowestRef > 0.0) out.lowestVolume = std::max(out.lowestVolume, std::fabs(lowestRun - lowestRef) / lowestRef);
+  }
+  if (!run.energy.empty() && run.energy.size() == reference.energy.size()) {
+    out.energyLost = reference.energy.back() - run.energy.back();
+    const double motion = *std::max_element(reference.kinetic.begin(), reference.kinetic.end());
+    out.energyLostShare = motion > 0.0 ? out.energyLost / motion : 0.0;
   }
   return out;
 }

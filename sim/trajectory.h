@@ -35,6 +35,7 @@ struct RunPath {
   std::vector<double> times;                // the frames reached
   std::vector<std::vector<Vec3>> centroid;  // [frame][body]
   std::vector<std::vector<double>> volume;  // [frame][body] (0 for an open surface)
+  std::vector<double> energy, kinetic;      // [frame] totals over the bodies [J]
   bool complete = false;                    // reached the duration under the monitor
   std::vector<bool> endsAtRest;             // [body] still over the last second (RestWatch)
   std::string failure;                      // the monitor's message otherwise
@@ -58,6 +59,10 @@ struct PathError {
   double centroidRms = 0.0;   // RMS over frames of the centroid's distance, / body size
   double endPosition = 0.0;   // the last frame's centroid distance, / body size
   double lowestVolume = 0.0;  // |lowest volume - reference's| / reference's (closed bodies)
+  // Energy: the run's total at the last frame below the reference's (what it dissipates beyond
+  // the physics: its numerical damping) [J], and that over the reference's largest kinetic energy
+  // (the energy of the motion, e.g. a drop's at its impact).
+  double energyLost = 0.0, energyLostShare = 0.0;
   uint32_t body = 0;          // the body with the largest centroidRms
 };
 // Throws std::invalid_argument when the runs do not share their frames (an incomplete run has

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "sim/force_stages.h"
 #include "sim/hinge.h"
@@ -118,9 +119,10 @@ VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), itera
   std::vector<uint32_t> fill(colourStart_.begin(), colourStart_.end() - 1);
   for (uint32_t i = 0; i < n_; ++i) colourVertices_[fill[colourOf[i]]++] = i;
 
-  for (auto* buffer : {&x0_, &y_, &accel_, &dx_, &contactPoint_, &contactNormal_}) buffer->assign(n_, Vec3{});
+  for (auto* buffer : {&x0_, &y_, &accel_, &contactPoint_, &contactNormal_}) buffer->assign(n_, Vec3{});
   dVolume_.assign(n_, 0.0);
   constrained_.assign(n_, 0);
+  arrival_.assign(n_, 0.0);
   for (auto* buffer : {&volume_, &stiffness_, &overpressure_, &sumA_, &sumB_, &factor_}) buffer->assign(gasBodies_.size(), 0.0);
   if (!gasBodies_.empty()) {
     for (auto* buffer : {&a_, &b_, &gradient_}) buffer->assign(n_, Vec3{});
@@ -131,7 +133,7 @@ VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), itera
   rigid_.assign(model.bodies.size(), RigidMotion{});
 }
 
-void VbdSolver::startAccelerations(const Forces& forces, const Vec3* x, const Vec3* v, double t) {
+void VbdSolver::startAccelerations(const Vec3* x, const Vec3* v, double t) {
   const Model& m = *model_;
   air_ = m.wind ? m.wind->airVelocity(t) : Vec3{};
   // Gravity, wind and the deformation damping at the step's start, serially (in a fixed order).
@@ -148,7 +150,6 @@ void VbdSolver::startAccelerations(const Forces& forces, const Vec3* x, const Ve
     damped = true;
   }
   if (damped) applyDeformationDamping(m, rigid_.data(), 0, n_, x, v, accel_.data());
-  (void)forces;
   for (std::size_t i = 0; i < n_; ++i) accel_[i] = m.gravity + accel_[i] * m.invMass[i];
 }
 
@@ -218,12 +219,39 @@ Vec3 VbdSolver::constrain(uint32_t i, const Vec3& xi, const Sym3& hessian, Vec3 
   return dx - n * s;
 }
 
+void VbdSolver::arrive(uint32_t i, Vec3& x, Vec3& v) const {
+  if (!constrained_[i] || !std::isfinite(arrival_[i])) return;
+  const Vec3& n = contactNormal_[i];
+  const double s = dot(x - contactPoint_[i], n);
+  v += n * (arrival_[i] - dot(v, n));
+  x -= n * (s + 1e-9);
+}
+
+void VbdSolver::findArrivals(const Vec3* x, double h) {
+  const Model& m = *model_;
+  for (uint32_t i = 0; i < n_; ++i) {
+    arrival_[i] = std::numeric_limits<double>::quiet_NaN();
+    if (!constrained_[i] || m.invMass[i] == 0.0) continue;
+    const Vec3& n = contactNormal_[i];
+    if (dot(x[i] - contactPoint_[i], n) > 1e-9) continue;  // the springs took it off the surface
+    // The force the surface holds it against at the end of the solve (its block's residual:
+    // inertia, gravity and the springs pressing it on) is the contact's: its impulse over the
+    // step, f . n h / m, is the normal velocity the surface took.
+    Vec3 f, g;
+    Sym3 H;
+    blockSystem(i, x, h, f, H, g);
+    const double pressing = dot(f, n);
+    if (!(pressing < 0.0)) continue;
+    arrival_[i] = dot(x[i] - x0_[i], n) / h + pressing * h / m.mass[i];
+  }
+}
+
 void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Vec3>& vs, double t, double dt) {
   const Model& m = *model_;
   Vec3 *x = xs.data(), *v = vs.data();
   ++stats_.steps;
-  t_ = t;
-  startAccelerations(forces, x, v, t);
+  h_ = dt;
+  startAccelerations(x, v, t);
   std::copy(xs.begin(), xs.end(), x0_.begin());
   ContactHit hit;
   const bool colliders = !m.colliders.empty();
@@ -326,6 +354,7 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
       for (std::size_t g = 0; g < gasBodies_.size(); ++g) updateGas(g);
     }
   }
+  if (colliders) findArrivals(x, dt);
   const double invDt = 1.0 / dt;
   for (uint32_t i = 0; i < n_; ++i) {
     if (m.invMass[i] == 0.0) continue;

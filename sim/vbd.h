@@ -17,8 +17,10 @@
 //     (I - u u^T), its dashpot d / h u u^T (the damping force with v = (x - x0) / h);
 //   hinge (Gauss-Newton): (k + d / h) g_i g_i^T, g_i = d theta / d x_i;
 //   gas: p0 V0 / V^2 g g^T with g = dV/dx_i (V is affine in each single vertex: d^2V/dx_i^2 = 0,
-//     so this is the exact block); and because no two vertices of a colour share a face, the
-//     volume after a colour's updates is exactly V + sum g_i . dx_i (summed in colour order);
+//     so this is the exact block). The gas couples a colour's vertices through the volume they
+//     share: the colour's system is its blocks plus p0 V0 / V^2 G G^T, solved exactly by
+//     Sherman-Morrison; and because no two vertices of a colour share a face, the volume after
+//     the colour is exactly V + sum g_i . dx_i (summed in colour order);
 //   drag: c m / h I.
 // Wind and the deformation damping are taken at the step's start (explicit, inside a): they
 // act on the body's slow motion, far below the step's limit.
@@ -27,7 +29,7 @@
 // n . (x_i - p) >= 0 (p the hit point, n its normal) inside its block solve: when the Newton
 // step would cross, the step is the one that minimises the block's quadratic on the surface
 // (a Lagrange multiplier along n). World's collide stage then applies restitution and friction
-// to the velocity that arrives, as for backward Euler.
+// to the velocity it arrived with (arrive()).
 //
 // What it costs and gives: each sweep costs about two explicit force evaluations (a strut is
 // visited from both ends, with its Hessian block); the step is bounded by accuracy, not by the
@@ -78,6 +80,16 @@ class VbdSolver {
   // Advances x, v by dt from time t (forces: the world's stages and threads).
   void step(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt);
 
+  // After a step: a vertex held on a collider's surface inside the solve ends on it with the
+  // velocity the solve gives, whose normal part is only what was left of the step's travel
+  // before the surface. Restitution and friction must act on the velocity the surface stopped:
+  // this gives vertex i, along the normal, its solved velocity less the contact's impulse (the
+  // force its block presses on the surface with at the solve's end, times h / m: inertia,
+  // gravity and the springs pressing it on), and puts it just behind the surface, so that the colliders'
+  // response (World's collide stage: restitution, friction on that normal impulse, the resting
+  // window) treats it as an explicit step's crossing. Others: unchanged.
+  void arrive(uint32_t i, Vec3& x, Vec3& v) const;
+
   int iterations() const { return iterations_; }
   void setIterations(int iterations) { iterations_ = iterations; }
   std::size_t colours() const { return colourStart_.empty() ? 0 : colourStart_.size() - 1; }
@@ -92,10 +104,12 @@ class VbdSolver {
   // Vertex i's block: the force f_i (the gas's at the current overpressure included) and the
   // Hessian H_i without the gas's term, and dV/dx_i of its gas body (0 without one).
   void blockSystem(uint32_t i, const Vec3* x, double h, Vec3& force, Sym3& hessian, Vec3& gradient) const;
+  // The held vertices' arrival velocities along their normals (arrive()) at the solve's end x.
+  void findArrivals(const Vec3* x, double h);
   // The step dx of vertex i at xi, held on the surface of its contact if it has one.
   Vec3 constrain(uint32_t i, const Vec3& xi, const Sym3& hessian, Vec3 dx) const;
   // The forces taken at the step's start (gravity, wind, deformation damping) into accel_.
-  void startAccelerations(const Forces& forces, const Vec3* x, const Vec3* v, double t);
+  void startAccelerations(const Vec3* x, const Vec3* v, double t);
 
   const Model* model_;
   int iterations_;
@@ -108,7 +122,7 @@ class VbdSolver {
   std::vector<int32_t> gasSlot_;  // per body: its index in volume_, or -1
   std::vector<uint32_t> gasBodies_;
   // Per step.
-  std::vector<Vec3> x0_, y_, accel_, dx_;
+  std::vector<Vec3> x0_, y_, accel_;
   std::vector<double> dVolume_;
   std::vector<double> volume_, stiffness_, overpressure_;  // per gas body: V, p0 V0 / V^2, p0 (V0 / V - 1)
   std::vector<double> sumA_, sumB_, factor_;                // per gas body, for a colour's solve
@@ -116,10 +130,11 @@ class VbdSolver {
   std::vector<double> ga_, gb_;
   std::vector<Sym3> hessian_;
   std::vector<uint8_t> constrained_;
+  std::vector<double> arrival_;  // per held vertex: its normal velocity without the surface (NaN: none)
   std::vector<Vec3> contactPoint_, contactNormal_;
   std::vector<RigidMotion> rigid_;
   Vec3 air_;
-  double t_ = 0.0;
+  double h_ = 0.0;  // the step being taken
   VbdStats stats_;
 };
 

@@ -443,7 +443,8 @@ void World::stepBackwardEuler() {
 
 void World::stepVbd() {
   vbd_->step(*forces_, x_, v_, time_, dt_);
-  if (!model_->colliders.empty()) lastPass([](std::size_t) {});  // restitution and friction
+  // Restitution and friction, on the velocities the held vertices arrived with (VbdSolver::arrive).
+  if (!model_->colliders.empty()) lastPass([&](std::size_t i) { vbd_->arrive(static_cast<uint32_t>(i), x_[i], v_[i]); });
 }
 
 void World::setIterations(int iterations) {

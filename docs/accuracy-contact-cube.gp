@@ -19,4 +19,6 @@ plot 'docs/accuracy-contact-cube.dat' index 0 using 2:3 with linespoints lw 2 pt
      'docs/accuracy-contact-cube.dat' index 4 using 2:3 with linespoints lw 2 pt 7 lc rgb '#1f77b4' title 'bs32' noenhanced, \
      'docs/accuracy-contact-cube.dat' index 4 using 2:3:1 with labels font ',7' offset 0.6,0.6 tc rgb '#1f77b4' notitle, \
      'docs/accuracy-contact-cube.dat' index 5 using 2:3 with linespoints lw 2 pt 7 lc rgb '#9467bd' title 'verlet_adaptive' noenhanced, \
-     'docs/accuracy-contact-cube.dat' index 5 using 2:3:1 with labels font ',7' offset 0.6,0.6 tc rgb '#9467bd' notitle
+     'docs/accuracy-contact-cube.dat' index 5 using 2:3:1 with labels font ',7' offset 0.6,0.6 tc rgb '#9467bd' notitle, \
+     'docs/accuracy-contact-cube.dat' index 6 using 2:3 with linespoints lw 2 pt 7 lc rgb '#000000' title 'vbd' noenhanced, \
+     'docs/accuracy-contact-cube.dat' index 6 using 2:3:1 with labels font ',7' offset 0.6,0.6 tc rgb '#000000' notitle

@@ -87,7 +87,7 @@ World::World(Model model, Integrator integrator, double dt)
   dampingLayers_ = model_->colliders.dampingLayers();
   movingColliders_ = model_->colliders.moving();
   if (movingColliders_) {
-    if (integrator == Integrator::BackwardEuler || integrator == Integrator::Vbd) {
+    if (isImplicit(integrator)) {
       throw Error("colliders that move are not supported with " + std::string(integratorName(integrator)) +
                   " (its solve holds the colliders still); use rk4, verlet or an adaptive step (--tolerance)");
     }
@@ -115,7 +115,7 @@ World::World(Model model, Integrator integrator, double dt)
   for (const Model::Attachment& a : model_->attachments) {
     if (std::isfinite(a.release)) kinks_.push_back(a.release);
   }
-  if (!model_->attachments.empty() && (integrator == Integrator::BackwardEuler || integrator == Integrator::Vbd)) {
+  if (!model_->attachments.empty() && isImplicit(integrator)) {
     throw Error("soft attachments ([[attach]] with a period) are not supported with " +
                 std::string(integratorName(integrator)) +
                 " (its solve does not have them); use rk4, verlet or an adaptive step (--tolerance)");

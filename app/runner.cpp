@@ -145,6 +145,10 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
     if (*overrides.iterations < 1 || *overrides.iterations > kMaxIterations) {
       throw Error("--iterations must be between 1 and " + std::to_string(kMaxIterations));
     }
+    if (scene.integrator != Integrator::Vbd) {
+      throw Error("--iterations sets vbd's sweeps a step, but the run's integrator is " +
+                  std::string(integratorName(scene.integrator)) + " (add --integrator vbd)");
+    }
     scene.iterations = *overrides.iterations;
   }
   if (overrides.substeps) {

@@ -15,6 +15,11 @@
 #                                     (about 35 minutes; one side only with its name), and
 #                                     springy's gas ball: strut and volume periods against dt
 #                                     (gas: about 1 minute)
+#   scripts/bench-bullet.sh --vbd     springy's gas ball on one thread: symplectic Euler at the
+#                                     scene's step against vbd at its two cheapest passing
+#                                     settings (issue 46), RUNS rounds interleaved, on an idle
+#                                     machine and then with a busy loop on the other core; a
+#                                     markdown table of medians and their ratios (about 1 minute)
 #
 # SPRINGY_BUILD_DIR (default build-bench) is configured with -DSPRINGY_BUILD_BENCHMARKS=ON
 # (a new directory also without the renderer and tests: only `springy check` is needed).
@@ -26,7 +31,8 @@ mode=bench side=both
 case "${1:-}" in
   "") ;;
   --sweep) mode=sweep; side=${2:-both} ;;
-  *) echo "usage: $0 [--sweep [bullet|springy|gas]]" >&2; exit 2 ;;
+  --vbd) mode=vbd ;;
+  *) echo "usage: $0 [--sweep [bullet|springy|gas] | --vbd]" >&2; exit 2 ;;
 esac
 
 # ---- the chosen settings (docs/bench-bullet.md: why) ----
@@ -81,6 +87,48 @@ bullet_run() { "$bullet" --quiet "$@" || true; }
 field() { grep -o "$1=[^ ]*" <<<"$2" | cut -d= -f2; }
 
 median() { sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+if [ "$mode" = vbd ]; then
+  # The settings: docs/bench-bullet.md, "Vertex block descent on the time-to-solution ball".
+  labels=("symplectic_euler, the scene's dt" "vbd, dt 2.5 ms, 4 sweeps" "vbd, dt 4 ms, 8 sweeps")
+  settings=("" "--integrator vbd --dt 0.0025 --iterations 4" "--integrator vbd --dt 0.004 --iterations 8")
+  tmp=$(mktemp -d)
+  busy=
+  trap '[ -z "$busy" ] || kill "$busy" 2>/dev/null; rm -rf "$tmp"' EXIT
+  for load in idle busy; do
+    if [ "$load" = busy ]; then
+      ( while :; do :; done ) &
+      busy=$!
+    fi
+    for r in $(seq "$runs"); do
+      echo "$load: round $r/$runs" >&2
+      for i in "${!settings[@]}"; do
+        # shellcheck disable=SC2086
+        springy_run "$gas_scene" --threads 1 ${settings[$i]} >>"$tmp/$load.$i"
+      done
+    done
+    if [ -n "$busy" ]; then kill "$busy"; wait "$busy" 2>/dev/null || true; busy=; fi
+  done
+  echo
+  echo "Medians of $runs interleaved rounds a load, one thread; $(nproc) cores, $(lscpu | sed -n 's/^Model name: *//p');"
+  echo "$(date -u '+%F %H:%M UTC'), commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)."
+  echo "\`springy check $gas_scene --min-volume 0.95 --threads 1 [SETTING]\`; busy: a shell loop spins on the other core."
+  echo
+  echo "| setting | load | passed | steps | max edge strain | wall time median [s] | range [s] | / symplectic Euler |"
+  echo "|---|---|---|---|---|---|---|---|"
+  for load in idle busy; do
+    base=$(awk '{ print $3 }' "$tmp/$load.0" | median)
+    for i in "${!settings[@]}"; do
+      f=$tmp/$load.$i
+      wall=$(awk '{ print $3 }' "$f" | median)
+      printf '| %s | %s | %s of %s | %s | %s | %s | %s | %s |\n' "${labels[$i]}" "$load" "$(grep -c '^ok ' "$f" || true)" "$runs" \
+        "$(awk 'NR == 1 { print $2 }' "$f")" "$(awk 'NR == 1 { print $8 }' "$f")" "$wall" \
+        "$(awk '{ print $3 }' "$f" | sort -g | sed -n '1p;$p' | paste -sd- -)" \
+        "$(awk -v w="$wall" -v b="$base" 'BEGIN { printf "%.1f", w / b }')"
+    done
+  done
+  exit 0
+fi
 
 if [ "$mode" = bench ]; then
   has_threads=no

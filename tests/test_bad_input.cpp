@@ -303,6 +303,15 @@ TEST_F(BadCommandLine, NonFiniteOrRunawaySettingsAreErrorsNotEmptyRuns) {
   }
 }
 
+TEST_F(BadCommandLine, SweepsForAnIntegratorThatDoesNotSweepAreRefused) {
+  const std::string s = scene("shape = \"icosphere\"\nsubdivisions = 1");
+  const CommandResult r = runSpringy("check " + s + " --iterations 4 --duration 0.1");
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_HAS(r.output, "--iterations sets vbd's sweeps a step, but the run's integrator is rk4 (add --integrator vbd)");
+  const CommandResult vbd = runSpringy("check " + s + " --iterations 4 --integrator vbd --duration 0.1");
+  EXPECT_EQ(vbd.status, 0) << vbd.output;
+}
+
 TEST_F(BadCommandLine, StudyRefusesZeroRepeatsAndMissingScenes) {
   CommandResult r = runSpringy("study accuracy --quick --repeats 0 -o " + (dir_ / "out").string());
   EXPECT_NE(r.status, 0) << r.output;

@@ -199,6 +199,11 @@ TEST(Vbd, SceneKeyAndErrors) {
   const std::string e = test::errorOf([] { parseScene("[scene]\niterations = 0\n", "/virtual/bad.toml"); });
   EXPECT_NE(e.find("/virtual/bad.toml:2"), std::string::npos) << e;
   EXPECT_NE(e.find("iterations"), std::string::npos) << e;
+  // Any other integrator would ignore the sweeps: the key is refused where it stands.
+  const std::string other = test::errorOf(
+      [] { parseScene("[scene]\nintegrator = \"rk4\"\niterations = 4\n", "/virtual/rk4.toml"); });
+  EXPECT_NE(other.find("/virtual/rk4.toml:3"), std::string::npos) << other;
+  EXPECT_NE(other.find("integrator is rk4"), std::string::npos) << other;
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 //
 // Counters: ns_per_strut / ns_per_hinge are per element per force evaluation; ns_per_vertex
 // is per vertex per step.
+#include <Eigen/Sparse>
 #include <benchmark/benchmark.h>
 #include <immintrin.h>
 
@@ -412,6 +413,43 @@ void BM_Forces(benchmark::State& state) {
   nsPer(state, "ns_per_vertex", static_cast<double>(model.vertexCount()));
 }
 BENCHMARK(BM_Forces)->DenseRange(2, 6)->UseRealTime();
+
+// --- a prefactored global solve (issue 46): the step of projective dynamics or of Liu et al.'s
+// fast mass-springs (2013) solves M/h^2 + sum_e k_e (e_i - e_j)(e_i - e_j)^T, a matrix fixed
+// over the run, once per iteration for x, y and z. Its cost, beside BM_Forces at the same level,
+// says how many explicit steps one iteration of such a method is worth on the same ball.
+
+void BM_PrefactoredGlobalSolve(benchmark::State& state) {
+  const Model model = ballModel(static_cast<int>(state.range(0)), false);
+  const auto n = static_cast<Eigen::Index>(model.vertexCount());
+  const double h = 1.0 / 60.0;
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index i = 0; i < n; ++i) entries.emplace_back(i, i, model.mass[static_cast<std::size_t>(i)] / (h * h));
+  for (const Strut& e : model.struts) {
+    const auto i = static_cast<Eigen::Index>(e.i), j = static_cast<Eigen::Index>(e.j);
+    entries.emplace_back(i, i, e.stiffness);
+    entries.emplace_back(j, j, e.stiffness);
+    entries.emplace_back(i, j, -e.stiffness);
+    entries.emplace_back(j, i, -e.stiffness);
+  }
+  Eigen::SparseMatrix<double> a(n, n);
+  a.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> factor(a);  // AMD ordering
+  if (factor.info() != Eigen::Success) state.SkipWithError("the matrix is not positive definite");
+  Eigen::MatrixXd rhs(n, 3), x(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Vec3& p = model.restPosition[static_cast<std::size_t>(i)];
+    rhs.row(i) << p.x, p.y, p.z;
+  }
+  for (auto _ : state) {
+    x = factor.solve(rhs);
+    benchmark::DoNotOptimize(x.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["factor_nonzeros"] = static_cast<double>(factor.matrixL().nestedExpression().nonZeros());
+  nsPer(state, "ns_per_vertex", static_cast<double>(model.vertexCount()));
+}
+BENCHMARK(BM_PrefactoredGlobalSolve)->DenseRange(2, 5)->UseRealTime();
 
 // --- contact between bodies (sim/contact.h): a layer of touching balls on the ground
 

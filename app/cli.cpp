@@ -31,7 +31,8 @@ void addRunOverrides(CLI::App* cmd, RunOverrides& o) {
                   "Choose each step by a tolerance: an adaptive integrator (verlet_adaptive unless --integrator bs32), "
                   "each step's error at most this fraction of each body's size (e.g. 1e-4)");
   cmd->add_option("--iterations", o.iterations,
-                  "vbd's sweeps over the vertices per step (default: the scene's [scene] iterations, else 8)");
+                  "vbd's sweeps over the vertices per step, 1 to 1000; vbd only (default: the scene's [scene] iterations, "
+                  "else 8)");
   cmd->add_option_function<std::string>(
       "--substeps",
       [&o](const std::string& text) {

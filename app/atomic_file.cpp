@@ -1,6 +1,5 @@
 #include "app/atomic_file.h"
 
-#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -14,14 +13,7 @@
 namespace springy {
 namespace {
 
-// Written by the signal handler, read by every thread: a lock-free atomic is async-signal-safe.
-std::atomic<int> gSignal{0};
-static_assert(std::atomic<int>::is_always_lock_free);
-
-void onSignal(int signal) {
-  int none = 0;
-  gSignal.compare_exchange_strong(none, signal);  // the first signal decides the exit status
-}
+void onSignal(int signal) { requestInterrupt(signal); }  // the first signal decides the exit status
 
 // The directory part of `path` with its trailing '/', or "" for a bare name.
 std::string directoryOf(const std::string& path) {
@@ -61,12 +53,8 @@ std::string followLinks(const std::string& path) {
 
 std::string errorText(int error) { return std::strerror(error); }
 
-bool interrupted() { return gSignal.load() != 0; }
-void requestInterrupt(int signal) { gSignal.store(signal); }
-void clearInterrupt() { gSignal.store(0); }
-int interruptSignal() { return gSignal.load(); }
 int interruptedExitStatus() {
-  const int s = gSignal.load();
+  const int s = interruptSignal();
   return 128 + (s != 0 ? s : SIGINT);
 }
 

@@ -18,6 +18,8 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/interrupt.h"
+
 namespace springy {
 
 class AtomicFile {
@@ -80,14 +82,9 @@ bool sameFile(const std::string& a, const std::string& b);
 // of killing the process silently mid-write. A signal the parent set to be ignored (nohup) stays
 // ignored.
 void installInterruptHandler();
-// True once one of the signals arrived.
-bool interrupted();
-// Sets the flag as the signal would (the Python module forwards a KeyboardInterrupt to a command
-// it runs on another thread), and clears it again once the command has stopped.
-void requestInterrupt(int signal);
-void clearInterrupt();
-// The first signal that arrived (0 if none).
-int interruptSignal();
+// The flag they set: interrupted(), requestInterrupt() (the Python module forwards a
+// KeyboardInterrupt to a command it runs on another thread), clearInterrupt(), interruptSignal()
+// (sim/interrupt.h).
 // The exit status of an interrupted run: 128 + the signal's number, as a shell reports a process
 // killed by it (130 for SIGINT, 129 for SIGHUP, 143 for SIGTERM).
 int interruptedExitStatus();

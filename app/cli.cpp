@@ -1,13 +1,22 @@
 #include "app/cli.h"
 
 #include <algorithm>
+#include <iostream>
 #include <filesystem>
 
+#include "app/atomic_file.h"
 #include "app/child.h"
+#include "sim/error.h"
 #include "sim/limits.h"
 
 namespace springy {
 namespace {
+
+#ifdef SPRINGY_RENDER_HELPER
+constexpr const char* kRenderHelper = SPRINGY_RENDER_HELPER;
+#else
+constexpr const char* kRenderHelper = nullptr;
+#endif
 
 // A fraction in [0, 1]; CLI::Range lets NaN through (every comparison with it is false).
 const CLI::Validator kFraction(
@@ -24,50 +33,34 @@ const CLI::Validator kFraction(
     },
     "FRACTION in [0, 1]");
 
-void addRunOverrides(CLI::App* cmd, RunOverrides& o) {
-  cmd->add_option("--integrator", o.integrator, "Override the scene's integrator: " + integratorNames());
-  cmd->add_option("--dt", o.dt, "Override the scene's time step [s] (the adaptive integrator's first step)");
-  cmd->add_option("--tolerance", o.tolerance,
-                  "Choose each step by a tolerance: an adaptive integrator (verlet_adaptive unless --integrator bs32), "
-                  "each step's error at most this fraction of each body's size (e.g. 1e-4)");
-  cmd->add_option("--iterations", o.iterations,
-                  "vbd's sweeps over the vertices per step, 1 to 1000; vbd only (default: the scene's [scene] iterations, "
-                  "else 8)");
-  cmd->add_option_function<std::string>(
-      "--substeps",
-      [&o](const std::string& text) {
-        if (text == "auto") {
-          o.autoSubsteps = true;
-          return;
-        }
-        std::size_t used = 0;
-        int n = 0;
-        try {
-          n = std::stoi(text, &used);
-        } catch (const std::exception&) {
-          used = 0;
-        }
-        if (used == 0 || used != text.size() || n < 1 || n > kMaxSubsteps) {
-          throw CLI::ValidationError("--substeps", "expected a whole number from 1 to " + std::to_string(kMaxSubsteps) +
-                                                       " or 'auto', got '" + text + "'");
-        }
-        o.substeps = n;
-      },
-      "Steps of dt/N per dt, or 'auto': the stability advisor's safe number");
-  cmd->add_option("--duration", o.duration, "Override the simulated duration [s]");
-  cmd->add_option("--threads", o.threads,
-                  "Simulation threads (default: $SPRINGY_THREADS, else all cores; models under " +
-                      std::to_string(World::kMinVerticesPerThread) +
-                      " vertices per thread use fewer). Results are identical for every count.")
-      ->check(CLI::Range(1u, 256u));
-  cmd->add_option("--set", o.sets,
-                  "Set a scene key before the scene is read, KEY=VALUE (repeatable): KEY a dotted path "
-                  "(environment.drag, scene.duration, body.mass for every body, body.0.mass for the first), "
-                  "VALUE a TOML value (0.5, \"rk4\", true, [0, 2, 0])")
-      ->allow_extra_args(false);
+// The run options (run/options.h), one CLI11 option per row of the table: the row's setter
+// checks the text and its error becomes CLI11's, so a bad value fails the parse with the message
+// the Python module gives for it too. `criteria`: also check's criteria (--min-volume, ...).
+void addRunOptions(CLI::App* cmd, RunOptions& o, bool criteria) {
+  for (const RunOption& row : runOptionTable()) {
+    if (row.group == RunOption::Group::Criteria && !criteria) continue;
+    auto set = [&o, &row](const std::string& text) {
+      try {
+        row.set(o, text);
+        checkRunOptions(o);
+      } catch (const Error& e) {
+        throw CLI::ValidationError(e.what());
+      }
+    };
+    CLI::Option* option =
+        row.value.empty() ? cmd->add_flag_callback(row.flag, [set] { set("true"); }, row.help)
+        : row.repeatable  ? cmd->add_option_function<std::vector<std::string>>(
+                               row.flag,
+                               [set](const std::vector<std::string>& texts) {
+                                 for (const std::string& text : texts) set(text);
+                               },
+                               row.help)
+                                ->allow_extra_args(false)
+                          : cmd->add_option_function<std::string>(row.flag, set, row.help);
+    if (!row.value.empty()) option->type_name(row.value);
+  }
 }
 
-#if defined(SPRINGY_HAVE_RENDER) || defined(SPRINGY_RENDER_HELPER)
 void addRenderOverrides(CLI::App* cmd, RenderOverrides& o) {
   cmd->add_option("--width", o.width, "Frame width in pixels (even)");
   cmd->add_option("--height", o.height, "Frame height in pixels (even)");
@@ -76,7 +69,6 @@ void addRenderOverrides(CLI::App* cmd, RenderOverrides& o) {
   cmd->add_flag("--no-shadows", o.noShadows, "No shadow pass");
   cmd->add_flag("--no-antialias", o.noAntialias, "No multisampling");
 }
-#endif
 
 }  // namespace
 
@@ -86,15 +78,8 @@ CommandLine::CommandLine() {
 
   checkCmd = app.add_subcommand("check", "Run scenes headlessly and check stability; per-body report");
   checkCmd->add_option("scenes", check.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
-  addRunOverrides(checkCmd, check.overrides);
+  addRunOptions(checkCmd, check.run, true);
   checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV");
-  checkCmd->add_option("--min-volume", check.minVolume, "Fail if a body's volume falls below this fraction of rest")
-      ->check(kFraction);
-  checkCmd->add_option("--end-volume", check.endVolume, "Fail if a body ends below this fraction of its rest volume")
-      ->check(kFraction);
-  checkCmd->add_flag("--end-at-rest", check.endAtRest,
-                     "Fail unless every body is at rest: over the last second no vertex moves more than 0.2% of "
-                     "its body's size");
   checkCmd->add_option("--json", check.json, "Write the per-body results as JSON (the records `sweep` gathers)");
   checkCmd->add_option("--junit", check.junit,
                        "Write the results as JUnit XML: a test case per scene and body, failures with the message");
@@ -124,14 +109,14 @@ CommandLine::CommandLine() {
       ->capture_default_str();
   exportCmd->add_option("--fps", exportFps, "Frames per second written (default: the scene's [render] fps)")
       ->check(CLI::Range(1.0, 240.0));
-  addRunOverrides(exportCmd, exportRun.overrides);
+  addRunOptions(exportCmd, exportRun.run, true);
   exportCmd->add_option("--trace", exportRun.trace, "Also write check's per-frame trace (CSV)");
   exportCmd->add_option("--json", exportRun.json, "Also write check's per-body results as JSON");
 
   suggestCmd =
       app.add_subcommand("suggest", "Estimate stable dt and propose stable T, P, T_theta, P_theta for a scene");
   suggestCmd->add_option("scenes", suggest.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
-  addRunOverrides(suggestCmd, suggest.overrides);
+  addRunOptions(suggestCmd, suggest.run, false);
   suggestCmd
       ->add_option("--keep-volume", suggest.keepVolume,
                    "Volume fraction each body should keep through its first impact; suggest simulates the scene "
@@ -157,12 +142,11 @@ CommandLine::CommandLine() {
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
 
-#if defined(SPRINGY_HAVE_RENDER) || defined(SPRINGY_RENDER_HELPER)
   renderCmd = app.add_subcommand("render", "Simulate scenes and encode MP4 videos (H.264)");
   renderCmd->add_option("scenes", render.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   renderCmd->add_option("-o,--output", render.output,
                         "Output .mp4 for one scene, or a directory (default: SCENE.mp4 here)");
-  addRunOverrides(renderCmd, render.overrides);
+  addRunOptions(renderCmd, render.run, false);
   addRenderOverrides(renderCmd, render.render);
   renderCmd->add_option("--crf", render.render.crf, "H.264 quality, 0-51, lower is better");
   renderCmd->add_option("--preset", render.render.preset, "x264 preset (ultrafast ... veryslow)");
@@ -173,7 +157,7 @@ CommandLine::CommandLine() {
   framesCmd->add_option("--times", frames.times, "Comma-separated times in seconds (default: 8 evenly spaced)");
   framesCmd->add_flag("--sheet", frames.sheet, "Also write SCENE_sheet.png, a labelled grid of the stills");
   framesCmd->add_flag("--sheet-only", frames.sheetOnly, "Write only the contact sheet");
-  addRunOverrides(framesCmd, frames.overrides);
+  addRunOptions(framesCmd, frames.run, false);
   addRenderOverrides(framesCmd, frames.render);
 
   reportCmd = app.add_subcommand(
@@ -182,15 +166,10 @@ CommandLine::CommandLine() {
   reportCmd->add_option("scenes", report.scenes, "Scene files (.toml)")->check(CLI::ExistingFile);
   reportCmd->add_option("-o,--output", report.output, "The report's folder (replaced if springy wrote it before)")
       ->required();
-  addRunOverrides(reportCmd, report.overrides);
+  addRunOptions(reportCmd, report.run, true);
   reportCmd->add_option("--width", reportWidth, "Video width in pixels (even)")->check(CLI::Range(16, 7680));
   reportCmd->add_option("--height", reportHeight, "Video height in pixels (even)")->check(CLI::Range(16, 4320));
   reportCmd->add_option("--fps", reportFps, "Frames per second (video, plots, replay)")->check(CLI::Range(1.0, 240.0));
-  reportCmd->add_option("--min-volume", report.minVolume, "check's criterion: volume never below this fraction of rest")
-      ->check(kFraction);
-  reportCmd->add_option("--end-volume", report.endVolume, "check's criterion: volume at the end at least this fraction")
-      ->check(kFraction);
-  reportCmd->add_flag("--end-at-rest", report.endAtRest, "check's criterion: every body at rest over the last second");
   reportCmd->add_option("--sweep", report.sweep, "A sweep's folder (its table.json): a page with a row per task")
       ->check(CLI::ExistingDirectory);
   reportCmd->add_option("--x", report.x, "The sweep's plot: the key across (default: the first that varies)");
@@ -199,7 +178,6 @@ CommandLine::CommandLine() {
                         "max_penetration, steps, kinetic or elastic");
   reportCmd->add_option("--study", report.study, "A study's folder (springy study -o DIR): its pages and plots")
       ->check(CLI::ExistingDirectory);
-#endif
 
   sweepCmd = app.add_subcommand("sweep", "Run a scene (or several) over a grid or list of settings (docs/sweeps.md)");
   sweepCmd->add_option("spec", sweep.spec, "Sweep spec (.toml)")->required()->check(CLI::ExistingFile);
@@ -246,48 +224,77 @@ int CommandLine::dispatch() {
     if (exportFps) {
       char fps[64];
       std::snprintf(fps, sizeof fps, "render.fps=%.17g", *exportFps);
-      exportRun.overrides.sets.push_back(fps);
+      exportRun.run.sets.push_back(fps);
     }
     return runCheck(exportRun);
   }
   if (suggestCmd->parsed()) return runSuggest(suggest);
   if (studyCmd->parsed()) return runStudy(study);
-#if defined(SPRINGY_HAVE_RENDER)
-  if (renderCmd->parsed()) return runRender(render);
-  if (framesCmd->parsed()) return runFrames(frames);
-#elif defined(SPRINGY_RENDER_HELPER)
-  // The drawing runs in springy-render beside this executable (app/CMakeLists.txt), with the same
-  // arguments, parsed here already: a bad one fails here, the same way.
-  if (renderCmd->parsed() || framesCmd->parsed()) {
-    const std::filesystem::path helper = std::filesystem::path(selfExecutable()).parent_path() / SPRINGY_RENDER_HELPER;
-    return runChild(helper.string(), args);
-  }
-#endif
-#if defined(SPRINGY_HAVE_RENDER) || defined(SPRINGY_RENDER_HELPER)
-  if (reportCmd->parsed()) {
-    // The video's size and rate as scene keys: check's run, the video and the sheet all take them.
-    if (reportWidth) report.overrides.sets.push_back("render.width=" + std::to_string(*reportWidth));
-    if (reportHeight) report.overrides.sets.push_back("render.height=" + std::to_string(*reportHeight));
-    if (reportFps) {
-      char fps[64];
-      std::snprintf(fps, sizeof fps, "render.fps=%.17g", *reportFps);
-      report.overrides.sets.push_back(fps);
-    }
-    report.command = {"springy"};
-    report.command.insert(report.command.end(), args.begin(), args.end());
-    return runReport(report);
-  }
-#endif
+  if (renderCmd->parsed() || framesCmd->parsed() || reportCmd->parsed()) return dispatchDrawing();
   if (sweepCmd->parsed()) return runSweep(sweep);
   if (runTaskCmd->parsed()) return springy::runTask(runTask);
   if (gatherCmd->parsed()) return runGather(gather);
   return 0;
 }
 
+int CommandLine::dispatchDrawing() {
+  const DrawingCommands& drawing = drawingCommands();
+  if (!drawing.render) {
+    // The drawing runs in springy-render beside this program (app/CMakeLists.txt), with the same
+    // arguments, parsed here already: a bad one fails here, the same way.
+    if (!kRenderHelper) throw Error("this springy was built without the renderer (-DSPRINGY_RENDER=ON builds it)");
+    return runChild((std::filesystem::path(selfExecutable()).parent_path() / kRenderHelper).string(), args);
+  }
+  if (renderCmd->parsed()) return drawing.render(render);
+  if (framesCmd->parsed()) return drawing.frames(frames);
+  // The video's size and rate as scene keys: the run and the video take them alike.
+  if (reportWidth) report.run.sets.push_back("render.width=" + std::to_string(*reportWidth));
+  if (reportHeight) report.run.sets.push_back("render.height=" + std::to_string(*reportHeight));
+  if (reportFps) {
+    char fps[64];
+    std::snprintf(fps, sizeof fps, "render.fps=%.17g", *reportFps);
+    report.run.sets.push_back(fps);
+  }
+  report.command = {"springy"};
+  report.command.insert(report.command.end(), args.begin(), args.end());
+  return drawing.report(report);
+}
+
+DrawingCommands& drawingCommands() {
+  static DrawingCommands commands;
+  return commands;
+}
+
 void parseCommandLine(CommandLine& cli, std::vector<std::string> args) {
   cli.args = args;
   std::reverse(args.begin(), args.end());  // CLI11 takes them last first
   cli.app.parse(args);
+}
+
+int runMain(int argc, char** argv) {
+  CommandLine cli;
+  installInterruptHandler();
+  try {
+    cli.args.assign(argv + 1, argv + argc);
+    cli.app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return cli.app.exit(e);
+  }
+  try {
+    return cli.dispatch();
+  } catch (const Error& e) {
+    std::cerr << "springy: " << e.what() << "\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "springy: out of memory (the scene or its meshes are too large for this machine)\n";
+    return 1;
+  } catch (const std::exception& e) {
+    // Not a user error springy foresaw (those are Error): still a message and a clean
+    // exit, never std::terminate's abort, so that temporary outputs are removed.
+    std::cerr << "springy: unexpected error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
 }
 
 }  // namespace springy

@@ -19,6 +19,8 @@ struct CommandLine {
 
   // Runs the parsed subcommand; returns its exit status. Throws springy::Error.
   int dispatch();
+  // render, frames and report: drawingCommands() where this program has them, else springy-render.
+  int dispatchDrawing();
 
   CLI::App app{"springy: soft bodies as springy meshes, simulated and rendered offscreen"};
   CheckOptions check;
@@ -49,5 +51,20 @@ struct CommandLine {
 
 // Parses `args` (without the program's name) into `cli`. Throws CLI::ParseError.
 void parseCommandLine(CommandLine& cli, std::vector<std::string> args);
+
+// The commands that draw (app/render_cmd.cpp, app/report.cpp), which need the renderer's
+// libraries: OSMesa (with LLVM) and FFmpeg bring about 150 shared libraries, whose loading took
+// 60 ms of every run. springy-render sets them (app/render_main.cpp); springy, which does not
+// link them, runs springy-render beside it for these commands, with its own arguments.
+struct DrawingCommands {
+  int (*render)(const RenderOptions&) = nullptr;
+  int (*frames)(const FramesOptions&) = nullptr;
+  int (*report)(const ReportOptions&) = nullptr;
+};
+DrawingCommands& drawingCommands();
+
+// main(): parses the arguments, dispatches, and turns every error into a message and an exit
+// status (app/main.cpp, app/render_main.cpp).
+int runMain(int argc, char** argv);
 
 }  // namespace springy

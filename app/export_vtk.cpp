@@ -18,7 +18,7 @@
 #include <memory>
 
 #include "app/atomic_file.h"
-#include "app/records.h"
+#include "run/records.h"
 #include "app/export.h"
 #include "app/folder.h"
 #include "sim/error.h"

@@ -13,7 +13,6 @@
 #include "app/atomic_file.h"
 #include "app/bounded_queue.h"
 #include "app/progress.h"
-#include "app/runner.h"
 #include "render/error.h"
 
 namespace springy {
@@ -38,6 +37,17 @@ struct Joiner {
   }
 };
 
+struct Closer {
+  BoundedQueue<FrameSnapshot>& a;
+  BoundedQueue<FrameSnapshot>& b;
+  BoundedQueue<Frame>& c;
+  ~Closer() {
+    a.close();
+    b.close();
+    c.close();
+  }
+};
+
 }  // namespace
 
 RenderEnvironment RenderEnvironment::read() {
@@ -49,133 +59,151 @@ RenderEnvironment RenderEnvironment::read() {
   return env;
 }
 
-FramePipelineResult runFramePipeline(World& world, Monitor& monitor, SceneView& view, render::VideoEncoder& encoder,
-                                     const FramePipelineSettings& settings) {
-  const long frames = settings.frames;
-  const std::size_t bytes =
-      static_cast<std::size_t>(settings.width) * static_cast<std::size_t>(settings.height) * 4;
+namespace {
 
-  Progress progress(settings.label, frames);
-  std::atomic<long long> simNs{0};
-  auto simulate = [&](long k) {
+// The stages' shared parts: the simulation of a frame (timed), and the progress line.
+class Stages {
+ public:
+  Stages(Run& run, SceneView& view, FrameSink& sink, const FramePipelineSettings& settings,
+         const render::VideoEncoder* encoder)
+      : run_(run), view_(view), sink_(sink), encoder_(encoder), progress_(settings.label, run.frames()),
+        bytes_(static_cast<std::size_t>(settings.width) * static_cast<std::size_t>(settings.height) * 4) {}
+
+  // Frame k's simulation: the run's start (k = 0) or its next frame. False when the run stopped
+  // (a failure, a signal); `interrupted` says which.
+  bool simulate(long k) {
     const auto t0 = Clock::now();
-    std::optional<Failure> f = advanceTo(world, monitor, static_cast<double>(k) / settings.fps);
-    simNs += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
-    return f;
-  };
-  auto report = [&](long done) {
-    const auto& rt = view.renderer().timings();
-    const render::EncodeTimings et = encoder.timings();
-    const double simMs = static_cast<double>(simNs.load()) / 1e6;
-    char detail[160];
-    std::snprintf(detail, sizeof detail, "sim %.1f, render %.1f, encode %.1f frames/s",
-                  1000.0 * static_cast<double>(done) / std::max(simMs, 1e-9),
-                  1000.0 * static_cast<double>(rt.frames) / std::max(rt.totalRenderMs, 1e-9),
-                  1000.0 * static_cast<double>(et.frames) / std::max(et.totalEncodeMs + et.totalConvertMs, 1e-9));
-    progress.update(done, detail);
-  };
-
-  FramePipelineResult result;
-  if (settings.serial) {
-    FrameSnapshot snapshot;
-    Frame f{std::vector<uint8_t>(bytes)};
-    for (long k = 0; k < frames; ++k) {
-      if (interrupted()) {
-        result.interrupted = true;
-        break;
-      }
-      result.failure = simulate(k);
-      if (result.failure) break;
-      takeSnapshot(world, snapshot);
-      view.draw(snapshot);
-      view.renderer().readPixels(f.rgba, render::RowOrder::BottomUp);
-      try {
-        encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
-      } catch (const render::RenderError& e) {
-        throw EncodeError(e.what());
-      }
-      report(k + 1);
+    if (k == 0) {
+      run_.start();
+    } else if (!interrupted()) {
+      run_.nextFrame();
     }
-  } else {
-    BoundedQueue<FrameSnapshot> freeSnapshots(3), snapshots(3);
-    for (int i = 0; i < 3; ++i) freeSnapshots.push(FrameSnapshot{});
-    BoundedQueue<Frame> empty(4), full(3);
-    for (int i = 0; i < 4; ++i) empty.push(Frame{std::vector<uint8_t>(bytes)});
-
-    std::exception_ptr simError, encodeError;
-    std::atomic<bool> simInterrupted{false};
-    // Simulation: frame k's snapshot into `snapshots`.
-    std::thread simThread([&] {
-      try {
-        for (long k = 0; k < frames; ++k) {
-          if (interrupted()) {
-            simInterrupted = true;
-            break;
-          }
-          if ((result.failure = simulate(k))) break;
-          FrameSnapshot s;
-          if (!freeSnapshots.pop(s)) break;  // the renderer stopped
-          takeSnapshot(world, s);
-          if (!snapshots.push(std::move(s))) break;
-        }
-      } catch (...) {
-        simError = std::current_exception();
-      }
-      snapshots.close();  // the renderer drains what is left, then stops
-    });
-    // Encoding: the `full` frames, in order, then back to `empty`.
-    std::thread encodeThread([&] {
-      Frame f;
-      try {
-        while (full.pop(f)) {
-          encoder.writeFrame(f.rgba, render::RowOrder::BottomUp);
-          empty.push(std::move(f));
-        }
-      } catch (...) {
-        encodeError = std::current_exception();
-        empty.close();  // unblock the renderer
-      }
-    });
-    {
-      // Declared after the threads: on the way out (also by an exception) the queues are closed
-      // first, so both threads finish, then they are joined.
-      Joiner joinSim{simThread}, joinEncode{encodeThread};
-      struct Closer {
-        BoundedQueue<FrameSnapshot>& a;
-        BoundedQueue<FrameSnapshot>& b;
-        BoundedQueue<Frame>& c;
-        ~Closer() {
-          a.close();
-          b.close();
-          c.close();
-        }
-      } closer{freeSnapshots, snapshots, full};
-      // Drawing, on this thread: each snapshot drawn and read back into an `empty` frame.
-      FrameSnapshot s;
-      long done = 0;
-      while (snapshots.pop(s)) {
-        view.draw(s);
-        freeSnapshots.push(std::move(s));
-        Frame f;
-        if (!empty.pop(f)) break;  // the encoder failed
-        view.renderer().readPixels(f.rgba, render::RowOrder::BottomUp);
-        if (!full.push(std::move(f))) break;
-        report(++done);
-      }
-    }
-    result.interrupted = simInterrupted;
-    if (simError) std::rethrow_exception(simError);
-    if (encodeError) {
-      try {
-        std::rethrow_exception(encodeError);
-      } catch (const render::RenderError& e) {
-        throw EncodeError(e.what());
-      }
+    simNs_ += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count();
+    interrupted_ = interrupted_ || interrupted();
+    return !interrupted_ && !run_.failure();
+  }
+  // Frame k drawn and read back into `rgba`.
+  void draw(const FrameSnapshot& snapshot, std::vector<uint8_t>& rgba) {
+    view_.draw(snapshot);
+    view_.renderer().readPixels(rgba, render::RowOrder::BottomUp);
+  }
+  void write(long k, const std::vector<uint8_t>& rgba) {
+    try {
+      sink_.write(k, rgba);
+    } catch (const render::RenderError& e) {
+      throw EncodeError(e.what());
     }
   }
-  progress.finish();
-  result.simulateMs = static_cast<double>(simNs.load()) / 1e6;
-  return result;
+  void report(long done) {
+    const auto& rt = view_.renderer().timings();
+    const double simMs = static_cast<double>(simNs_.load()) / 1e6;
+    char detail[160];
+    int n = std::snprintf(detail, sizeof detail, "sim %.1f, render %.1f frames/s",
+                          1000.0 * static_cast<double>(done) / std::max(simMs, 1e-9),
+                          1000.0 * static_cast<double>(rt.frames) / std::max(rt.totalRenderMs, 1e-9));
+    if (encoder_) {
+      const render::EncodeTimings et = encoder_->timings();
+      std::snprintf(detail + n, sizeof detail - static_cast<std::size_t>(n), ", encode %.1f frames/s",
+                    1000.0 * static_cast<double>(et.frames) / std::max(et.totalEncodeMs + et.totalConvertMs, 1e-9));
+    }
+    progress_.update(done, detail);
+  }
+  std::size_t bytes() const { return bytes_; }
+  long frames() const { return run_.frames(); }
+  World& world() { return run_.world(); }
+  FramePipelineResult result() {
+    progress_.finish();
+    return {interrupted_, static_cast<double>(simNs_.load()) / 1e6};
+  }
+  std::atomic<bool> interrupted_{false};
+
+ private:
+  Run& run_;
+  SceneView& view_;
+  FrameSink& sink_;
+  const render::VideoEncoder* encoder_;
+  Progress progress_;
+  std::size_t bytes_;
+  std::atomic<long long> simNs_{0};
+};
+
+// The reference order, on one thread: simulate k, draw k, write k.
+FramePipelineResult runSerial(Stages& stages) {
+  FrameSnapshot snapshot;
+  std::vector<uint8_t> rgba(stages.bytes());
+  for (long k = 0; k < stages.frames(); ++k) {
+    if (!stages.simulate(k)) break;
+    takeSnapshot(stages.world(), snapshot);
+    stages.draw(snapshot, rgba);
+    stages.write(k, rgba);
+    stages.report(k + 1);
+  }
+  stages.simulate(stages.frames());  // the last frame is checked too
+  return stages.result();
+}
+
+FramePipelineResult runThreaded(Stages& stages) {
+  BoundedQueue<FrameSnapshot> freeSnapshots(3), snapshots(3);
+  for (int i = 0; i < 3; ++i) freeSnapshots.push(FrameSnapshot{});
+  BoundedQueue<Frame> empty(4), full(3);
+  for (int i = 0; i < 4; ++i) empty.push(Frame{std::vector<uint8_t>(stages.bytes())});
+  std::exception_ptr simError, encodeError;
+  // Simulation: frame k's snapshot into `snapshots`, and the last frame checked.
+  std::thread simThread([&] {
+    try {
+      for (long k = 0; k <= stages.frames(); ++k) {
+        if (!stages.simulate(k) || k == stages.frames()) break;
+        FrameSnapshot s;
+        if (!freeSnapshots.pop(s)) break;  // the renderer stopped
+        takeSnapshot(stages.world(), s);
+        if (!snapshots.push(std::move(s))) break;
+      }
+    } catch (...) {
+      simError = std::current_exception();
+    }
+    snapshots.close();  // the renderer drains what is left, then stops
+  });
+  // Writing: the `full` frames, in order, then back to `empty`.
+  std::thread encodeThread([&] {
+    Frame f;
+    try {
+      for (long k = 0; full.pop(f); ++k) {
+        stages.write(k, f.rgba);
+        empty.push(std::move(f));
+      }
+    } catch (...) {
+      encodeError = std::current_exception();
+      empty.close();  // unblock the renderer
+    }
+  });
+  {
+    // Declared after the threads: on the way out (also by an exception) the queues are closed
+    // first, so both threads finish, then they are joined.
+    Joiner joinSim{simThread}, joinEncode{encodeThread};
+    Closer closer{freeSnapshots, snapshots, full};
+    // Drawing, on this thread: each snapshot drawn and read back into an `empty` frame.
+    FrameSnapshot s;
+    long done = 0;
+    while (snapshots.pop(s)) {
+      Frame f;
+      if (!empty.pop(f)) break;  // the writer failed
+      stages.draw(s, f.rgba);
+      freeSnapshots.push(std::move(s));
+      if (!full.push(std::move(f))) break;
+      stages.report(++done);
+    }
+  }
+  if (simError) std::rethrow_exception(simError);
+  if (encodeError) std::rethrow_exception(encodeError);
+  return stages.result();
+}
+
+}  // namespace
+
+FramePipelineResult runFramePipeline(Run& run, SceneView& view, FrameSink& sink, const FramePipelineSettings& settings,
+                                     const render::VideoEncoder* timings) {
+  Stages stages(run, view, sink, settings, timings);
+  return settings.serial ? runSerial(stages) : runThreaded(stages);
 }
 
 }  // namespace springy

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <thread>
 
@@ -54,6 +55,28 @@ void applyRenderOverrides(SceneDesc& scene, const RenderOverrides& o) {
   if (o.noOverlay) r.overlay = false;
   if (o.noShadows) r.shadows = false;
   if (o.noAntialias) r.antialias = false;
+}
+
+std::function<void(SceneDesc&)> renderEdit(const RenderOverrides& overrides) {
+  return [&overrides](SceneDesc& scene) {
+    applyRenderOverrides(scene, overrides);
+    checkCamera(scene);
+  };
+}
+
+render::VideoSettings videoSettingsOf(const SceneDesc& scene, const RenderEnvironment& env) {
+  render::VideoSettings vs;
+  vs.width = scene.view.render.width;
+  vs.height = scene.view.render.height;
+  vs.fps = scene.view.render.fps;
+  vs.crf = scene.view.render.crf;
+  vs.preset = scene.view.render.preset;
+  // On two cores or fewer one x264 thread: more take the cores from llvmpipe's rasterising
+  // threads, and the drawing is the slowest stage (docs/benchmarks.md: 52.0 -> 55.3 frames/s at
+  // 720p, 23.6 -> 25.2 at 1080p on 2 cores). With more cores, x264's own choice.
+  vs.threads = std::thread::hardware_concurrency() <= 2 ? 1 : 0;
+  if (env.x264Threads) vs.threads = *env.x264Threads;
+  return vs;
 }
 
 namespace {
@@ -126,21 +149,6 @@ const char* signalName(int signal) {
               " left as it was)");
 }
 
-render::VideoSettings videoSettingsOf(const SceneDesc& scene, const RenderEnvironment& env) {
-  render::VideoSettings vs;
-  vs.width = scene.view.render.width;
-  vs.height = scene.view.render.height;
-  vs.fps = scene.view.render.fps;
-  vs.crf = scene.view.render.crf;
-  vs.preset = scene.view.render.preset;
-  // On two cores or fewer one x264 thread: more take the cores from llvmpipe's rasterising
-  // threads, and the drawing is the slowest stage (docs/benchmarks.md: 52.0 -> 55.3 frames/s at
-  // 720p, 23.6 -> 25.2 at 1080p on 2 cores). With more cores, x264's own choice.
-  vs.threads = std::thread::hardware_concurrency() <= 2 ? 1 : 0;
-  if (env.x264Threads) vs.threads = *env.x264Threads;
-  return vs;
-}
-
 // The closing summary: the video, then the time per frame of each stage.
 void printSummary(const std::string& path, const std::string& outPath, const SceneDesc& scene, long frames,
                   double wallSeconds, const FramePipelineResult& run, const render::RenderTimings& rt,
@@ -170,22 +178,16 @@ void printSummary(const std::string& path, const std::string& outPath, const Sce
 
 int renderOne(const std::string& path, const std::string& outPath, const RenderOptions& options,
               const RenderEnvironment& env) {
-  // A scene that gives no step: the drawn run is the try of the advisor's default step, as
-  // check's run is (a separate try simulated the whole scene once more before drawing).
-  bool untried = false;
-  SceneDesc scene = loadSceneWith(path, options.overrides, true, &untried);
-  applyRenderOverrides(scene, options.render);
-  checkCamera(scene);
+  // A scene that gives no step: the drawn run is the try of the advisor's default step.
+  Run run(path, options.run, renderEdit(options.render));
+  const SceneDesc& scene = run.scene();
   // An unwritable target fails here, before any simulation; no scene is ever written over.
   AtomicFile output(outPath, options.scenes);
+  render::RenderSettings rs = renderSettingsOf(scene);
+  rs.profilePasses = env.profilePasses;
+  if (env.msaa) rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
   for (;;) {
-    World world = makeWorld(scene, options.overrides);
-    Monitor monitor(world);
-    render::RenderSettings rs = renderSettingsOf(scene);
-    rs.profilePasses = env.profilePasses;
-    if (env.msaa) rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
-    SceneView view(scene, world, rs);
-
+    SceneView view(scene, run.world(), rs);
     render::VideoEncoder::setLibraryLogging(false);
     render::VideoEncoder encoder;
     try {
@@ -193,32 +195,23 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
     } catch (const render::RenderError& e) {
       videoFailed(output, e);
     }
-
-    FramePipelineSettings pipeline;
-    pipeline.label = scene.name;
-    pipeline.frames = frameCount(scene.duration, 1.0 / scene.view.render.fps);
-    pipeline.fps = scene.view.render.fps;
-    pipeline.width = scene.view.render.width;
-    pipeline.height = scene.view.render.height;
-    pipeline.serial = env.serial;
+    FramePipelineSettings pipeline{scene.name, scene.view.render.width, scene.view.render.height, env.serial};
     const auto wallStart = Clock::now();
-    FramePipelineResult run;
+    EncoderSink sink(encoder);
+    FramePipelineResult result;
     try {
-      run = runFramePipeline(world, monitor, view, encoder, pipeline);
+      result = runFramePipeline(run, view, sink, pipeline, &encoder);
     } catch (const EncodeError& e) {
       videoFailed(output, e);
     }
-    if (run.interrupted || interrupted()) {  // also a signal after the last frame was simulated
+    if (result.interrupted || interrupted()) {  // also a signal after the last frame was simulated
       std::cerr << "springy render: interrupted by " << signalName(interruptSignal()) << "; " << output.target()
                 << " not written\n";
       return interruptedExitStatus();
     }
-    if (run.failure &&
-        retryDefaultStep(path, scene, *run.failure, untried, threadCount(options.overrides), std::cerr)) {
-      continue;  // drawn again, into the same temporary file, at the step that passed
-    }
-    if (run.failure) {
-      std::cerr << "springy render: " << path << ": " << run.failure->message << "\n"
+    if (run.failure() && run.retry()) continue;  // drawn again, into the same temporary file, at the step that passed
+    if (run.failure()) {
+      std::cerr << "springy render: " << path << ": " << run.failure()->message << "\n"
                 << "springy render: stopped; " << output.target() << " not written (no video of an unstable run)\n";
       return 1;
     }
@@ -228,7 +221,7 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
       videoFailed(output, e);
     }
     output.commit();
-    printSummary(path, outPath, scene, pipeline.frames, msSince(wallStart) / 1000.0, run, view.renderer().timings(),
+    printSummary(path, outPath, scene, run.frames(), msSince(wallStart) / 1000.0, result, view.renderer().timings(),
                  encoder, env);
     return 0;
   }
@@ -295,18 +288,15 @@ int timeDecimals(const std::vector<double>& times) {
   return kMost;
 }
 
-// One run of framesOne: its exit status, or nothing when the run was the default step's try, it
-// failed, and retryDefaultStep found a step that passes (the stills are then drawn again, over
+// One pass of framesOne over the times: its exit status, or nothing when the run was the default
+// step's try, it failed, and a step that passes was found (the stills are then drawn again, over
 // the same files).
-std::optional<int> framesRun(const std::string& path, const FramesOptions& options, SceneDesc& scene,
-                             const std::vector<double>& times, int decimals, const std::string& stem, bool& untried) {
+std::optional<int> framesRun(Run& run, const FramesOptions& options, const std::vector<double>& times,
+                             int decimals, const std::string& stem) {
   namespace fs = std::filesystem;
-  World world = makeWorld(scene, options.overrides);
-  Monitor monitor(world);
-  SceneView view(scene, world, renderSettingsOf(scene));
+  SceneView view(run.scene(), run.world(), renderSettingsOf(run.scene()));
   std::vector<render::Image> stills;
   std::vector<std::string> labels;
-  const double frame = 1.0 / scene.view.render.fps;
   auto stopped = [&](const std::string& what) {
     std::cerr << "springy frames: interrupted by " << signalName(interruptSignal()) << "; " << what
               << " not written\n";
@@ -324,52 +314,36 @@ std::optional<int> framesRun(const std::string& path, const FramesOptions& optio
     std::snprintf(label, sizeof label, "t = %.*f s", decimals, t);
     std::snprintf(name, sizeof name, "_t%0*.*f.png", decimals + 4, decimals, t);
     const std::string file = (fs::path(options.output) / (stem + name)).string();
-    // Step frame by frame so the monitor sees the run as densely as a video would, and a signal
-    // stops the run within a frame's simulation.
-    while (!world.reached(t)) {
-      if (interrupted()) return stopped(options.sheetOnly ? "the contact sheet" : file);
-      const double next = std::min(t, world.time() + frame);
-      if (std::optional<Failure> failure = advanceTo(world, monitor, next)) {
-        if (retryDefaultStep(path, scene, *failure, untried, threadCount(options.overrides), std::cerr)) {
-          return std::nullopt;
-        }
-        std::cerr << "springy frames: " << path << ": " << failure->message << "\n";
-        return 1;
-      }
+    // Frame by frame, so the monitor sees the run as a video would, then to the still's time.
+    if (run.runUntil(t)) {
+      if (run.retry()) return std::nullopt;
+      std::cerr << "springy frames: " << run.path() << ": " << run.failure()->message << "\n";
+      return 1;
     }
     if (interrupted()) return stopped(options.sheetOnly ? "the contact sheet" : file);
-    view.draw(world);
+    view.draw(run.world());
     render::Image image = view.renderer().readImage();
     if (!options.sheetOnly) write(file, image);
     stills.push_back(std::move(image));
     labels.push_back(label);
   }
   if (options.sheet || options.sheetOnly) {
-    render::ContactSheetOptions sheet;
-    sheet.columns = std::min<int>(4, static_cast<int>(stills.size()));
     const std::string file = (fs::path(options.output) / (stem + "_sheet.png")).string();
     if (interrupted()) return stopped(file);
-    write(file, render::makeContactSheet(stills, labels, sheet));
+    write(file, render::makeContactSheet(stills, labels, sheetOptions(stills.size())));
   }
   return 0;
 }
 
 int framesOne(const std::string& path, const FramesOptions& options) {
-  bool untried = false;  // as render: the run is the default step's try
-  SceneDesc scene = loadSceneWith(path, options.overrides, true, &untried);
-  applyRenderOverrides(scene, options.render);
-  checkCamera(scene);
-  std::vector<double> times = options.times.empty() ? std::vector<double>{} : parseTimes(options.times, scene.duration);
-  if (times.empty()) {
-    for (int i = 0; i < 8; ++i) times.push_back(scene.duration * i / 7.0);  // eight evenly spaced stills
-  }
+  Run run(path, options.run, renderEdit(options.render));
+  std::vector<double> times = options.times.empty() ? std::vector<double>{} : parseTimes(options.times, run.scene().duration);
+  if (times.empty()) times = sheetTimes(run.scene().duration);
   const int decimals = timeDecimals(times);
   makeDirectories(options.output, "-o");
   const std::string stem = stemOf(path);
   for (;;) {  // again only after the default step's try failed and a longer step passed
-    if (const std::optional<int> status = framesRun(path, options, scene, times, decimals, stem, untried)) {
-      return *status;
-    }
+    if (const std::optional<int> status = framesRun(run, options, times, decimals, stem)) return *status;
   }
 }
 

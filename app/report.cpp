@@ -9,9 +9,9 @@
 //   DIR/study/*.html          a study's Markdown pages with their plots
 //   DIR/assets/               the pages' style and the 3D viewer (three.js, bundled)
 // A page uses only files in the folder (no network), so the folder can be zipped, mailed, or
-// opened from a USB stick. Each scene is run once by check (its trace, its records, the replay),
-// then drawn by springy-render (the video and the contact sheet: the same simulation, which is
-// deterministic). The folder is built under a temporary name and renamed when complete
+// opened from a USB stick. Each scene is run once (run/run.h): its video and contact sheet are
+// drawn from the run's frames while its trace, records, replay and plots are taken from the same
+// frames. The folder is built under a temporary name and renamed when complete
 // (OutputFolder): a failure or a signal leaves the earlier report as it was.
 #include <cmark-gfm-core-extensions.h>
 #include <cmark-gfm.h>
@@ -31,11 +31,16 @@
 #include <cstring>
 
 #include "app/atomic_file.h"
-#include "app/records.h"
 #include "app/child.h"
 #include "app/commands.h"
 #include "app/folder.h"
-#include "app/runner.h"
+#include "app/frame_pipeline.h"
+#include "app/run_outputs.h"
+#include "app/scene_view.h"
+#include "render/image.h"
+#include "render/video_encoder.h"
+#include "run/records.h"
+#include "run/run.h"
 #include "sim/error.h"
 
 // The pages' style and the bundled viewer, embedded by app/report_assets.cpp.
@@ -101,33 +106,14 @@ std::string badge(bool ok, const std::string& text) {
   return std::string("<span class=\"") + (ok ? "ok" : "bad") + "\">" + xmlEscaped(text) + "</span>";
 }
 
-// The command line of springy-render for the run's overrides (the same run as check's).
-std::vector<std::string> overrideArgs(const RunOverrides& o) {
-  std::vector<std::string> args;
-  if (o.integrator) args.insert(args.end(), {"--integrator", *o.integrator});
-  if (o.dt) args.insert(args.end(), {"--dt", exact(*o.dt)});
-  if (o.tolerance) args.insert(args.end(), {"--tolerance", exact(*o.tolerance)});
-  if (o.autoSubsteps) {
-    args.insert(args.end(), {"--substeps", "auto"});
-  } else if (o.substeps) {
-    args.insert(args.end(), {"--substeps", std::to_string(*o.substeps)});
-  }
-  if (o.duration) args.insert(args.end(), {"--duration", exact(*o.duration)});
-  if (o.threads) args.insert(args.end(), {"--threads", std::to_string(*o.threads)});
-  for (const std::string& s : o.sets) args.insert(args.end(), {"--set", s});
-  return args;
-}
-
-void runRenderer(const std::vector<std::string>& args, const std::string& what) {
-  const fs::path helper = fs::path(selfExecutable()).parent_path() / "springy-render";
-  const int status = runChild(helper.string(), args);
-  if (interrupted()) return;
-  if (status != 0) throw Error(what + " failed (springy-render exited with " + std::to_string(status) + ")");
-}
-
+// Runs gnuplot on `script` in its folder: no shell, so no name (a quote, a `;`) is ever read as
+// a command.
 void runGnuplot(const fs::path& script) {
-  const std::string command = "cd '" + script.parent_path().string() + "' && gnuplot '" + script.filename().string() + "'";
-  if (std::system(command.c_str()) != 0) throw Error("gnuplot failed on " + script.string());
+  const std::string gnuplot = findProgram("gnuplot");
+  if (gnuplot.empty()) throw Error("report: gnuplot is not installed (its plots need it): apt install gnuplot-nox");
+  if (runChild(gnuplot, {script.filename().string()}, script.parent_path().string()) != 0 && !interrupted()) {
+    throw Error("gnuplot failed on " + script.string());
+  }
 }
 
 // A gnuplot string literal (single quotes; a quote doubled).
@@ -261,10 +247,10 @@ std::string checkTable(const SceneRecord& r, const ReportOptions& o) {
       const std::string cls = least <= 0.0 ? "" : *v >= least ? " class=\"ok\"" : " class=\"bad\"";
       return "<td" + cls + ">" + number(*v, std::abs(*v) < 1e3 ? "%.3f" : "%.3g") + "</td>";
     };
-    const std::string rest = o.endAtRest ? (body.atRest ? " class=\"ok\"" : " class=\"bad\"") : "";
+    const std::string rest = o.run.endAtRest ? (body.atRest ? " class=\"ok\"" : " class=\"bad\"") : "";
     t += "<tr><td>" + xmlEscaped(body.name) + "</td><td>" + std::to_string(body.steps) + "</td><td>" +
          number(body.maxStrain) + "</td><td>" + number(body.maxPenetration, "%.2e") + "</td>" +
-         volume(body.volumeMin, o.minVolume) + volume(body.volumeEnd, o.endVolume) + "<td>" + number(body.kinetic) +
+         volume(body.volumeMin, o.run.minVolume) + volume(body.volumeEnd, o.run.endVolume) + "<td>" + number(body.kinetic) +
          "</td><td>" + number(body.elastic) + "</td><td" + rest + ">" + (body.atRest ? "yes" : "no") + "</td>" +
          (failedHere ? "<td class=\"bad\">failed</td>" : r.status == SceneRecord::Status::Ok ? "<td class=\"ok\">ok</td>"
                                                                                               : "<td>-</td>") +
@@ -276,9 +262,9 @@ std::string checkTable(const SceneRecord& r, const ReportOptions& o) {
 std::string criteriaText(const ReportOptions& o) {
   std::string c = "stable (no NaN, no body past 10&times; its size, no energy gained from nothing, no vertex behind "
                   "a plane)";
-  if (o.minVolume > 0) c += "; volume &ge; " + number(o.minVolume) + " of rest throughout";
-  if (o.endVolume > 0) c += "; volume &ge; " + number(o.endVolume) + " of rest at the end";
-  if (o.endAtRest) c += "; at rest over the last second";
+  if (o.run.minVolume > 0) c += "; volume &ge; " + number(o.run.minVolume) + " of rest throughout";
+  if (o.run.endVolume > 0) c += "; volume &ge; " + number(o.run.endVolume) + " of rest at the end";
+  if (o.run.endAtRest) c += "; at rest over the last second";
   return c;
 }
 
@@ -303,7 +289,7 @@ void writeScenePage(const fs::path& dir, const SceneResult& s, const ReportOptio
           "</dd><dt>bodies</dt><dd>" + std::to_string(r.bodies.size()) + " (" + std::to_string(s.vertices) +
           " vertices)</dd>";
   if (!r.bodies.empty()) page += "<dt>steps</dt><dd>" + std::to_string(r.bodies[0].steps) + "</dd>";
-  page += "<dt>wall time</dt><dd>" + number(r.wall, "%.3g") + " s (check's run)</dd><dt>criteria</dt><dd>" +
+  page += "<dt>wall time</dt><dd>" + number(r.wall, "%.3g") + " s (the run, drawn and written)</dd><dt>criteria</dt><dd>" +
           criteriaText(o) + "</dd></dl>\n</section>\n";
   if (s.motion) {
     page += "<section class=\"grid\">\n<div><h2>Video</h2>\n<video id=\"video\" controls muted playsinline "
@@ -347,53 +333,145 @@ void writeScenePage(const fs::path& dir, const SceneResult& s, const ReportOptio
   writeText(dir / "index.html", page);
 }
 
-// One scene: check (trace, records, replay), then the video and the sheet, the plots, the page.
-// Returns false when interrupted.
+// The plots' numbers: the run's measures at each frame (a run that starts over starts them over).
+class SeriesFrames : public RunObserver {
+ public:
+  explicit SeriesFrames(Series& series) : series_(series) {}
+  void started(const Run&) override { series_.clear(); }
+  void frame(const Run& run) override { series_.add(run.world(), run.monitor()); }
+
+ private:
+  Series& series_;
+};
+
+// The drawn frames to the video's encoder, and the contact sheet's stills: the frames nearest the
+// sheet's eight times (sheetTimes), at half the video's size (eight make a sheet twice its width).
+class VideoAndSheet : public FrameSink {
+ public:
+  VideoAndSheet(render::VideoEncoder& encoder, const Run& run) : encoder_(encoder) {
+    const RenderDesc& r = run.scene().view.render;
+    width_ = r.width, height_ = r.height;
+    for (double t : sheetTimes(run.scene().duration)) {
+      const long k = std::clamp(std::lround(t / run.frameTime()), 0L, run.frames() - 1);
+      char label[64];
+      std::snprintf(label, sizeof label, "t = %.2f s", static_cast<double>(k) * run.frameTime());
+      wanted_.push_back(k);
+      labels_.push_back(label);
+    }
+    stills_.resize(wanted_.size());
+  }
+  void write(long k, const std::vector<uint8_t>& rgba) override {
+    encoder_.writeFrame(rgba, render::RowOrder::BottomUp);
+    for (std::size_t i = 0; i < wanted_.size(); ++i) {
+      if (wanted_[i] == k) stills_[i] = halved(rgba);
+    }
+  }
+  render::Image sheet() const { return render::makeContactSheet(stills_, labels_, sheetOptions(stills_.size())); }
+
+ private:
+  // The frame at half its size (each pixel the mean of four), rows top-down.
+  render::Image halved(const std::vector<uint8_t>& rgba) const {
+    render::Image out;
+    out.width = width_ / 2, out.height = height_ / 2;
+    out.rgba.resize(static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height) * 4);
+    const auto at = [&](int x, int y, int c) {
+      return static_cast<unsigned>(rgba[(static_cast<std::size_t>(height_ - 1 - y) * static_cast<std::size_t>(width_) +
+                                         static_cast<std::size_t>(x)) * 4 + static_cast<std::size_t>(c)]);
+    };
+    for (int y = 0; y < out.height; ++y) {
+      for (int x = 0; x < out.width; ++x) {
+        for (int c = 0; c < 4; ++c) {
+          const unsigned sum = at(2 * x, 2 * y, c) + at(2 * x + 1, 2 * y, c) + at(2 * x, 2 * y + 1, c) +
+                               at(2 * x + 1, 2 * y + 1, c);
+          out.rgba[(static_cast<std::size_t>(y) * static_cast<std::size_t>(out.width) + static_cast<std::size_t>(x)) * 4 +
+                   static_cast<std::size_t>(c)] = static_cast<uint8_t>((sum + 2) / 4);
+        }
+      }
+    }
+    return out;
+  }
+
+  render::VideoEncoder& encoder_;
+  int width_ = 0, height_ = 0;
+  std::vector<long> wanted_;
+  std::vector<std::string> labels_;
+  std::vector<render::Image> stills_;
+};
+
+// The scene's run, drawn: the video and the sheet from the pipeline, the observers' outputs
+// (trace, replay, plots) from the same frames. Again from the start when the default step's try
+// fails. Returns false when interrupted.
+bool drawRun(Run& run, const fs::path& dir, const std::string& stem) {
+  const SceneDesc& scene = run.scene();
+  const RenderEnvironment env = RenderEnvironment::read();
+  for (;;) {
+    SceneView view(scene, run.world(), renderSettingsOf(scene));
+    render::VideoEncoder::setLibraryLogging(false);
+    render::VideoEncoder encoder;
+    const std::string video = (dir / (stem + ".mp4")).string();
+    encoder.open(video, videoSettingsOf(scene, env));
+    VideoAndSheet sink(encoder, run);
+    const FramePipelineSettings settings{scene.name, scene.view.render.width, scene.view.render.height, env.serial};
+    const FramePipelineResult result = runFramePipeline(run, view, sink, settings, &encoder);
+    if (result.interrupted || interrupted()) return false;
+    if (run.failure() && run.retry()) continue;
+    if (!run.failure()) run.judgeEnd();
+    // A run that failed only a criterion (--end-at-rest, --end-volume) is a valid motion: its video
+    // is shown beside the failure. An unstable one has none.
+    if (run.failure() && !run.failure()->criterion) {
+      fs::remove(video);
+      return true;
+    }
+    encoder.finish();
+    AtomicFile sheet((dir / (stem + "_sheet.png")).string());
+    sheet.write(render::encodePng(sink.sheet()));
+    sheet.commit();
+    return true;
+  }
+}
+
+// One scene: its run (the video, the sheet, the trace, the record, the replay and the plots all
+// from it), then the page. Returns false when interrupted.
 bool reportScene(const fs::path& root, SceneResult& s, const ReportOptions& o) {
   const fs::path dir = root / s.stem;
   makeDirectories(dir.string(), "report");
-  Series series;
-  CheckOptions c;
-  c.scenes = {s.path};
-  c.overrides = o.overrides;
-  c.trace = (dir / "trace.csv").string();
-  c.json = (dir / "check.json").string();
-  c.exportOutput = (dir / "replay.js").string();
-  c.replay = true;
-  c.exportOnCriterionFailure = true;
-  c.minVolume = o.minVolume;
-  c.endVolume = o.endVolume;
-  c.endAtRest = o.endAtRest;
-  c.command = "report";
-  std::vector<SceneRecord> records;
-  c.records = &records;
-  c.onFrame = [&series](long k, const World& world, const Monitor& monitor) {
-    if (k == 1) series.clear();
-    series.add(world, monitor);
-  };
-  runCheck(c);
-  if (interrupted()) return false;
-  s.record = records.at(0);
-  s.vertices = series.vertices;
-  s.motion = fs::exists(dir / "replay.js");
   if (fs::exists(s.path)) copyFile(s.path, dir / "scene.toml");
-  if (s.motion) {
-    std::vector<std::string> args = {"render", s.path, "-o", (dir / (s.stem + ".mp4")).string()};
-    for (const std::string& a : overrideArgs(o.overrides)) args.push_back(a);
-    runRenderer(args, s.path + ": the video");
+  Series series;
+  try {
+    Run run(s.path, o.run, renderEdit(RenderOverrides{}));
+    RunHeader header(false);
+    run.observe(header);
+    AtomicFile traceFile((dir / "trace.csv").string(), {s.path});
+    std::ofstream trace(traceFile.temporaryPath());
+    writeTraceHeader(trace);
+    TraceRows rows(trace, traceFile.temporaryPath());
+    run.observe(rows);
+    ExportFrames replay((dir / "replay.js").string(), {s.path}, openReplay);
+    run.observe(replay);
+    SeriesFrames plotted(series);
+    run.observe(plotted);
+    if (!drawRun(run, dir, s.stem)) return false;
+    trace.close();
+    traceFile.commit();
+    s.record = run.record();
+    printResults(run);
+    std::printf("  %s\n", run.failure() ? ("FAILED: " + run.failure()->message).c_str() : "ok");
+    s.motion = !run.failure() || run.failure()->criterion;
+    if (s.motion) replay.exporter()->commit();
+    writeFileAtomically((dir / "check.json").string(), recordsJson({s.record}));
+  } catch (const Error& e) {
     if (interrupted()) return false;
-    // The sheet's stills at half the video's size: eight of them make a sheet twice its width.
-    args = {"frames", s.path, "-o", dir.string(), "--sheet-only"};
-    for (const std::string& a : overrideArgs(o.overrides)) args.push_back(a);
-    const SceneDesc scene = loadSceneSetting(s.path, o.overrides.sets);
-    const auto half = [](int pixels) { return std::to_string(std::max(16, pixels / 4 * 2)); };
-    args.insert(args.end(), {"--width", half(scene.view.render.width), "--height", half(scene.view.render.height)});
-    runRenderer(args, s.path + ": the contact sheet");
-    if (interrupted()) return false;
+    std::cerr << "springy report: " << e.what() << "\n";
+    s.record = SceneRecord{};
+    s.record.path = s.path;
+    s.record.scene = s.stem;
+    s.record.status = SceneRecord::Status::Error;
+    s.record.message = e.what();
   }
+  s.vertices = series.vertices;
   if (!series.time.empty()) writePlots(dir, series);
   writeScenePage(dir, s, o, series);
-  return true;
+  return !interrupted();
 }
 
 // ---- a sweep -------------------------------------------------------------------------------
@@ -668,7 +746,7 @@ int runReport(const ReportOptions& o) {
   if (o.scenes.empty() && o.sweep.empty() && o.study.empty()) {
     throw Error("report: give scenes, --sweep DIR or --study DIR");
   }
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0) {
+  if (findProgram("gnuplot").empty()) {
     throw Error("report: gnuplot is not installed (its plots need it): apt install gnuplot-nox");
   }
   // Each scene gets its folder, named by its file.

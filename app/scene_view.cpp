@@ -1,5 +1,6 @@
 #include "app/scene_view.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <span>
@@ -239,6 +240,18 @@ void SceneView::placeMovingColliders(double t) {
 void SceneView::draw(const World& world) {
   takeSnapshot(world, scratch_);
   draw(scratch_);
+}
+
+std::vector<double> sheetTimes(double duration) {
+  std::vector<double> times;
+  for (int i = 0; i < 8; ++i) times.push_back(duration * i / 7.0);
+  return times;
+}
+
+render::ContactSheetOptions sheetOptions(std::size_t stills) {
+  render::ContactSheetOptions sheet;
+  sheet.columns = static_cast<int>(std::min<std::size_t>(4, stills));
+  return sheet;
 }
 
 }  // namespace springy

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "render/image.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 
@@ -59,5 +60,11 @@ void checkCamera(const SceneDesc& scene);
 
 // Render settings from a scene's [render] table.
 render::RenderSettings renderSettingsOf(const SceneDesc& scene);
+
+// The stills of a contact sheet when none are asked for (`springy frames`, the report): eight
+// evenly spaced over the run, its start and its end included.
+std::vector<double> sheetTimes(double duration);
+// A contact sheet's layout for that many stills: at most four columns.
+render::ContactSheetOptions sheetOptions(std::size_t stills);
 
 }  // namespace springy

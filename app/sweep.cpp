@@ -32,6 +32,7 @@
 #include "app/cli.h"
 #include "app/commands.h"
 #include "app/sweep.h"
+#include "run/load.h"
 #include "sim/error.h"
 #include "sim/limits.h"
 
@@ -352,9 +353,9 @@ void validateTasks(const Spec& spec, const std::vector<PlannedTask>& tasks) {
     CommandLine cli;
     try {
       parseCommandLine(cli, p.task.command);
-      const RunOverrides& overrides = spec.command == "check"    ? cli.check.overrides
-                                      : spec.command == "render" ? cli.render.overrides
-                                                                 : cli.frames.overrides;
+      const RunOptions& overrides = spec.command == "check"    ? cli.check.run
+                                      : spec.command == "render" ? cli.render.run
+                                                                 : cli.frames.run;
       loadSceneWith(p.task.scene, overrides, /*advise=*/false);
       continue;
     } catch (const CLI::ParseError& e) {

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "app/records.h"
+#include "run/records.h"
 
 namespace springy {
 

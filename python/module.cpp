@@ -16,6 +16,7 @@
 #include <functional>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -28,9 +29,11 @@
 #include <vector>
 
 #include "app/atomic_file.h"
+#include "app/frame_pipeline.h"
 #include "app/commands.h"
-#include "app/records.h"
-#include "app/runner.h"
+#include "run/records.h"
+#include "run/advisor.h"
+#include "run/run.h"
 #include "app/scene_view.h"
 #include "render/error.h"
 #include "sim/diagnostics.h"
@@ -182,28 +185,22 @@ struct Range {
 
 class Simulation {
  public:
-  Simulation(const std::string& path, RunOverrides overrides, double minVolume)
-      : path_(path), overrides_(std::move(overrides)) {
-    limits_.minVolume = minVolume;
-    scene_ = loadSceneWith(path_, overrides_, true, &untried_);
-    frame_ = 1.0 / scene_.view.render.fps;
-    restart();
-  }
+  Simulation(const std::string& path, RunOptions options) : run_(path, std::move(options)) {}
 
-  const World& world() const { return *world_; }
-  const SceneDesc& scene() const { return scene_; }
-  bool untried() const { return untried_; }
+  const Run& runner() const { return run_; }
+  const World& world() const { return run_.world(); }
+  const SceneDesc& scene() const { return run_.scene(); }
 
   // The vertex range of body `body`, or every vertex for -1. Raises IndexError.
   Range range(long body) const {
-    if (body == -1) return {0, static_cast<uint32_t>(world_->model().vertexCount())};
+    if (body == -1) return {0, static_cast<uint32_t>(world().model().vertexCount())};
     const BodyInfo& info = this->body(body);
     return {info.firstVertex, info.vertexCount};
   }
 
   // Body `body` (not -1). Raises IndexError.
   const BodyInfo& body(long index) const {
-    const std::vector<BodyInfo>& bodies = world_->model().bodies;
+    const std::vector<BodyInfo>& bodies = world().model().bodies;
     if (index < 0 || index >= static_cast<long>(bodies.size())) {
       throw py::index_error("body " + std::to_string(index) + ": the scene has " + std::to_string(bodies.size()) +
                             " bodies (indices from 0)");
@@ -211,32 +208,26 @@ class Simulation {
     return bodies[static_cast<std::size_t>(index)];
   }
 
-  // Advances through every frame time up to `until`, then to `until` itself, as check does.
+  // Advances through every frame time up to `until`, then to `until` itself, as check does: a
+  // frame at a time with the GIL released, Ctrl-C looked for between frames.
   void run(double until) {
     enter();
     if (!std::isfinite(until)) throw py::value_error("run(until=...): the time must be finite");
-    if (until < world_->time() - 0.5 * world_->dt()) {
+    const World& w = world();
+    if (until < w.time() - 0.5 * w.dt()) {
       throw py::value_error("run(until=" + exactNumber(until) + "): the simulation is already at t = " +
-                            exactNumber(world_->time()) + " s (it never runs backwards)");
+                            exactNumber(w.time()) + " s (it never runs backwards)");
     }
-    if (!world_->adaptive() && (until - world_->time()) / world_->dt() > kMaxSteps) {
-      throw py::value_error("run(until=" + exactNumber(until) + "): over " + exactNumber(kMaxSteps) +
-                            " steps of " + exactNumber(world_->dt()) + " s");
+    if (!w.adaptive() && (until - w.time()) / w.dt() > kMaxSteps) {
+      throw py::value_error("run(until=" + exactNumber(until) + "): over " + exactNumber(kMaxSteps) + " steps of " +
+                            exactNumber(w.dt()) + " s");
     }
-    const double watchFrom = scene_.duration - RestWatch::kWindow;
     for (;;) {
-      const double next = static_cast<double>(frames_ + 1) * frame_;
-      const bool onFrame = next <= until + 1e-9 * frame_;
-      const double target = onFrame ? next : until;
-      if (!onFrame && world_->reached(target)) break;
-      const std::optional<Failure> failure = released([&] { return advanceTo(*world_, *monitor_, target); });
-      if (onFrame) {
-        ++frames_;
-        if (world_->time() >= watchFrom - 1e-9) rest_.add(world_->positions());
-      }
-      if (failure) fail(*failure);
+      const double next = static_cast<double>(run_.frame() + 1) * run_.frameTime();
+      const double target = next <= until + 1e-9 * run_.frameTime() ? next : until;
+      if (released([&] { return run_.runUntil(target); })) fail();
       checkSignals();
-      if (!onFrame) break;
+      if (target != next) return;
     }
   }
 
@@ -248,114 +239,91 @@ class Simulation {
     constexpr long kChunk = 4096;  // steps between looks for Ctrl-C
     for (long done = 0; done < n;) {
       const long chunk = std::min(kChunk, n - done);
-      const std::optional<Failure> failure = released([&]() -> std::optional<Failure> {
-        for (long i = 0; i < chunk && world_->stepProblem().empty(); ++i) {
-          world_->stepToward(std::numeric_limits<double>::infinity());
-        }
-        if (world_->stepProblem().empty()) return std::nullopt;
-        std::optional<Failure> seen = monitor_->check(*world_);  // a blow-up it sees says more
-        return seen ? seen : Failure{0, world_->stepCount(), world_->time(), world_->stepProblem()};
-      });
-      if (failure) fail(*failure);
       done += chunk;
+      if (released([&] { return run_.step(chunk, check && done == n); })) fail();
       if (done < n) checkSignals();
     }
-    while (world_->reached(static_cast<double>(frames_ + 1) * frame_)) ++frames_;
-    if (check) {
-      if (std::optional<Failure> failure = monitor_->check(*world_)) fail(*failure);
-    }
+    if (n == 0 && check && released([&] { return run_.step(0, true); })) fail();
   }
 
   // Runs on to the end of the scene (check's last frame) and returns check's record as JSON (the
   // same fields as `check --json`). A failure of the monitor raises Unstable (with the record); a
-  // criterion (min_volume, end_volume, end_at_rest) that fails gives status "failed". When the
-  // scene gives no step and the run from the start fails, longer counts of substeps are tried as
-  // check tries them, and the run starts again with the count that passes.
-  std::string check(double minVolume, double endVolume, bool endAtRest) {
+  // criterion (min_volume, end_volume, end_at_rest) that fails gives status "failed". A scene
+  // that gives no step, run from its start, tries longer steps as check does (Run::complete).
+  std::string check(std::optional<double> minVolume, std::optional<double> endVolume, std::optional<bool> endAtRest) {
     enter();
-    if (!(minVolume >= 0.0 && minVolume <= 1.0) || !(endVolume >= 0.0 && endVolume <= 1.0)) {
-      throw py::value_error("check(min_volume=..., end_volume=...): fractions of the rest volume, from 0 to 1");
+    try {
+      run_.setCriteria(minVolume, endVolume, endAtRest);
+    } catch (const Error& e) {
+      throw py::value_error(std::string("check(): ") + e.what());
     }
-    limits_.minVolume = std::max(limits_.minVolume, minVolume);
-    monitor_->setMinVolume(limits_.minVolume);
-    const auto start = std::chrono::steady_clock::now();
-    const double end = static_cast<double>(frameCount(scene_.duration, frame_)) * frame_;
-    std::optional<Failure> failure;
-    for (;;) {
-      const bool fromStart = pristine_;
-      try {
-        if (!world_->reached(end)) run(end);  // a simulation run past the end is checked as it is
-        break;
-      } catch (py::error_already_set& e) {
-        if (!e.matches(gUnstable) || !failure_) throw;
-        const Failure first = *failure_;
-        if (first.criterion) {  // min_volume: the run failed the check, as check reports it
-          failure = first;
-          break;
-        }
-        if (!fromStart || !untried_) {
-          attachRecord(e, first);
-          throw;
-        }
-        bool untried = true;
-        // Throws springy::Error when no count of substeps up to the limit passes.
-        if (!released([&] { return retryDefaultStep(path_, scene_, first, untried, threadCount(overrides_), std::cerr); })) {
-          attachRecord(e, first);
-          throw;
-        }
-        untried_ = false;
-        restart();
-      }
-    }
-    if (!failure) failure = endCriteria(*world_, *monitor_, rest_, endVolume, endAtRest);
-    SceneRecord record = makeRecord();
-    record.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (failure) {
-      record.status = SceneRecord::Status::Failed;
-      record.failedBody = failure->body;
-      record.message = failure->message;
-    }
-    return toJson(record).dump();
-  }
-
-  // Sets the Unstable exception's `record` to check's record of the failed run.
-  void attachRecord(py::error_already_set& e, const Failure& failure) const {
-    SceneRecord record = makeRecord();
-    record.status = SceneRecord::Status::Failed;
-    record.failedBody = failure.body;
-    record.message = failure.message;
-    e.value().attr("record") = py::module_::import("json").attr("loads")(toJson(record).dump());
-  }
-
-  SceneRecord makeRecord() const {
-    SceneRecord record;
-    record.path = path_;
-    record.scene = scene_.name;
-    record.integrator = std::string(integratorName(scene_.integrator));
-    record.dt = scene_.dt;
-    record.duration = scene_.duration;
-    record.substeps = scene_.substeps;
-    for (uint32_t b = 0; b < world_->model().bodies.size(); ++b) {
-      record.bodies.push_back(bodyResult(*world_, *monitor_, rest_, b));
-    }
-    return record;
+    const std::optional<Failure> failure = released([&] { return run_.complete(); });
+    checkSignals();
+    if (failure && !failure->criterion) fail(toJson(run_.record()).dump());
+    return toJson(run_.record()).dump();
   }
 
   // Replaces the positions or the velocities of a range (checked: shape and finiteness). The
   // integrator's caches and the contact history start again, and so does the monitor's watch
   // (energy put in by hand is no instability).
   void setRows(py::handle value, long body, bool positions) {
-    enter();
+    enter(false);
     const char* what = positions ? "positions" : "velocities";
     const Range r = range(body);
     const std::string name = (body == -1 ? std::string("sim.") : "body " + std::to_string(body) + ": ") + what;
+    const auto rows = checkedRows(value, name, r.count);
+    const auto in = rows.unchecked<2>();
+    std::vector<Vec3> x = world().positions(), v = world().velocities();
+    std::vector<Vec3>& target = positions ? x : v;
+    for (uint32_t i = 0; i < r.count; ++i) target[r.first + i] = Vec3(in(i, 0), in(i, 1), in(i, 2));
+    run_.setState(std::move(x), std::move(v));
+  }
+
+  // The frame at this instant as `springy frames` draws it: HxWx3 uint8, rows top-down.
+  py::array render(std::optional<int> width, std::optional<int> height, bool overlay, bool shadows, bool antialias) {
+    enter(false);
+    RenderOverrides o;
+    o.width = width;
+    o.height = height;
+    o.noOverlay = !overlay;
+    o.noShadows = !shadows;
+    o.noAntialias = !antialias;
+    // The view (its GL context, meshes and scene copy) is made again only when what it draws changes.
+    const auto key = std::make_tuple(width, height, overlay, shadows, antialias, scene().substeps);
+    if (!view_ || key != viewKey_) {
+      SceneDesc drawn = scene();
+      applyRenderOverrides(drawn, o);  // throws for a bad size before the old view is dropped
+      view_.reset();
+      viewScene_ = std::move(drawn);
+      view_ = std::make_unique<SceneView>(viewScene_, world(), renderSettingsOf(viewScene_));
+      viewKey_ = key;
+    }
+    view_->draw(world());
+    const render::Image image = view_->renderer().readImage();
+    py::array_t<uint8_t> out({image.height, image.width, 3});
+    uint8_t* rgb = out.mutable_data();
+    const std::size_t pixels = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
+    for (std::size_t i = 0; i < pixels; ++i) {
+      for (std::size_t c = 0; c < 3; ++c) rgb[3 * i + c] = image.rgba[4 * i + c];
+    }
+    return out;
+  }
+
+ private:
+  // `value` as rows of three finite doubles, `count` of them; raises naming `name`.
+  static py::array_t<double, py::array::c_style | py::array::forcecast> checkedRows(py::handle value,
+                                                                                    const std::string& name,
+                                                                                    uint32_t count) {
     py::array given = py::array::ensure(value);
-    if (!given) throw py::type_error(name + ": expected an array of numbers, not " + std::string(py::str(py::type::of(value).attr("__name__"))));
-    if (given.ndim() != 2 || given.shape(0) != r.count || given.shape(1) != 3) {
+    if (!given) {
+      throw py::type_error(name + ": expected an array of numbers, not " +
+                           std::string(py::str(py::type::of(value).attr("__name__"))));
+    }
+    if (given.ndim() != 2 || given.shape(0) != count || given.shape(1) != 3) {
       std::string shape = "(";
       for (py::ssize_t i = 0; i < given.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(given.shape(i));
       shape += given.ndim() == 1 ? ",)" : ")";
-      throw py::value_error(name + ": expected shape (" + std::to_string(r.count) + ", 3), got " + shape);
+      throw py::value_error(name + ": expected shape (" + std::to_string(count) + ", 3), got " + shape);
     }
     const char kind = given.dtype().kind();
     if (kind != 'f' && kind != 'i' && kind != 'u') {
@@ -372,66 +340,15 @@ class Simulation {
         }
       }
     }
-    std::vector<Vec3> x = world_->positions(), v = world_->velocities();
-    std::vector<Vec3>& target = positions ? x : v;
-    for (uint32_t i = 0; i < r.count; ++i) {
-      target[r.first + i] = Vec3(in(i, 0), in(i, 1), in(i, 2));
-    }
-    world_->setState(std::move(x), std::move(v), world_->time());
-    monitor_.emplace(*world_, limits_);
-    failure_.reset();
-    pristine_ = false;
-  }
-
-  // The frame at this instant as `springy frames` draws it: HxWx3 uint8, rows top-down.
-  py::array render(std::optional<int> width, std::optional<int> height, bool overlay, bool shadows, bool antialias) {
-    enter();
-    RenderOverrides o;
-    o.width = width;
-    o.height = height;
-    o.noOverlay = !overlay;
-    o.noShadows = !shadows;
-    o.noAntialias = !antialias;
-    // The view (its GL context, meshes and scene copy) is made again only when what it draws changes.
-    const auto key = std::make_tuple(width, height, overlay, shadows, antialias, scene_.substeps);
-    if (!view_ || key != viewKey_) {
-      SceneDesc drawn = scene_;
-      applyRenderOverrides(drawn, o);  // throws for a bad size before the old view is dropped
-      view_.reset();
-      viewScene_ = std::move(drawn);
-      view_ = std::make_unique<SceneView>(viewScene_, *world_, renderSettingsOf(viewScene_));
-      viewKey_ = key;
-    }
-    view_->draw(*world_);
-    const render::Image image = view_->renderer().readImage();
-    py::array_t<uint8_t> out({image.height, image.width, 3});
-    uint8_t* rgb = out.mutable_data();
-    const std::size_t pixels = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
-    for (std::size_t i = 0; i < pixels; ++i) {
-      for (std::size_t c = 0; c < 3; ++c) rgb[3 * i + c] = image.rgba[4 * i + c];
-    }
-    return out;
-  }
-
- private:
-  // A new world at the scene's start (after load, and after check chose a longer step).
-  void restart() {
-    view_.reset();
-    world_.reset();
-    world_.emplace(makeWorld(scene_, overrides_));
-    monitor_.emplace(*world_, limits_);
-    rest_ = RestWatch{};
-    frames_ = 0;
-    failure_.reset();
-    pristine_ = true;
+    return rows;
   }
 
   // Every call that reads or changes the state starts here. Stepping a simulation that failed
-  // raises its failure again: its state is what the monitor refused (set the state, or load the
-  // scene again). While one thread steps it (the GIL released), no other may touch it.
-  void enter() const {
+  // raises its failure again (`stepping`): its state is what the monitor refused (set the state,
+  // or load the scene again). While one thread steps it (the GIL released), no other may touch it.
+  void enter(bool stepping = true) const {
     if (busy_) throw py::value_error("the simulation is being stepped on another thread; wait for that call to return");
-    if (failure_) raiseUnstable(*failure_, *world_);
+    if (stepping && run_.failure()) raise(*run_.failure(), world());
   }
 
   // Runs fn with the GIL released, the simulation marked busy.
@@ -446,30 +363,21 @@ class Simulation {
     return fn();
   }
 
-  [[noreturn]] void fail(const Failure& failure) {
-    failure_ = failure;
-    pristine_ = false;
-    Failure said = failure;
-    if (untried_ && !failure.criterion) {
-      said.message += " (the scene gives no step, and springy's default, " + substepsText(scene_.substeps) +
+  // Raises the run's failure as springy.Unstable (with check's record, when given).
+  [[noreturn]] void fail(const std::string& recordJson = "") {
+    Failure said = *run_.failure();
+    if (run_.untried() && !said.criterion) {
+      said.message += " (the scene gives no step, and springy's default, " + substepsText(scene().substeps) +
                       ", was not tried: sim.check() tries longer ones from the start, or load the scene with "
-                      "substeps=" + std::to_string(2 * scene_.substeps) + ")";
+                      "substeps=" + std::to_string(2 * scene().substeps) + ")";
     }
-    raiseUnstable(said, *world_);
+    raise(said, world(), recordJson.empty() ? py::none() : py::module_::import("json").attr("loads")(recordJson));
+  }
+  [[noreturn]] static void raise(const Failure& failure, const World& world, py::object record = py::none()) {
+    raiseUnstable(failure, world, std::move(record));
   }
 
-  std::string path_;
-  RunOverrides overrides_;
-  SceneDesc scene_;
-  bool untried_ = false;  // the step is the advisor's default, not yet tried (check tries it)
-  double frame_ = 0.0;    // 1 / fps [s]
-  MonitorLimits limits_;
-  std::optional<World> world_;
-  std::optional<Monitor> monitor_;
-  RestWatch rest_;  // the frames of the scene's last second (check --end-at-rest)
-  long frames_ = 0;  // frame times reached
-  std::optional<Failure> failure_;
-  bool pristine_ = true;  // at the start, as loaded
+  Run run_;
   bool busy_ = false;     // a call is stepping it with the GIL released
   SceneDesc viewScene_;   // the scene as drawn (its [render] with the overrides)
   std::unique_ptr<SceneView> view_;
@@ -506,19 +414,21 @@ py::dict measuresDict(const BodyMeasures& m) {
   return d;
 }
 
-RunOverrides overridesOf(const std::vector<std::string>& sets, std::optional<std::string> integrator,
-                         std::optional<double> dt, std::optional<int> substeps, bool autoSubsteps,
-                         std::optional<double> duration, std::optional<double> tolerance,
-                         std::optional<unsigned> threads) {
-  RunOverrides o;
-  o.sets = sets;
-  o.integrator = std::move(integrator);
-  o.dt = dt;
-  o.substeps = substeps;
-  o.autoSubsteps = autoSubsteps;
-  o.duration = duration;
-  o.tolerance = tolerance;
-  o.threads = threads;
+// Run options from Python's keywords (their values as the command line's text: springy.load
+// passes str(value)), through the table the command line reads (run/options.h): the same checks
+// and messages.
+RunOptions runOptionsOf(const std::vector<std::string>& sets, const std::map<std::string, std::string>& given) {
+  RunOptions o;
+  for (const std::string& s : sets) setRunOption(o, "set", s);
+  for (const auto& [name, text] : given) {
+    const RunOption* option = findRunOption(name);
+    if (!option || name == "set" || option->flag == name) {
+      std::string names;
+      for (const RunOption& row : runOptionTable()) names += (names.empty() ? "" : ", ") + row.name;
+      throw py::type_error("'" + name + "' is not an option of a run; they are: " + names);
+    }
+    setRunOption(o, name, text);
+  }
   return o;
 }
 
@@ -551,25 +461,18 @@ PYBIND11_MODULE(_springy, m) {
 
   py::class_<Simulation>(m, "Simulation")
       .def(py::init([](const std::string& path, const std::vector<std::string>& sets,
-                       std::optional<std::string> integrator, std::optional<double> dt, std::optional<int> substeps,
-                       bool autoSubsteps, std::optional<double> duration, std::optional<double> tolerance,
-                       std::optional<unsigned> threads, double minVolume, bool quiet) {
-             if (!(minVolume >= 0.0 && minVolume <= 1.0)) {
-               throw py::value_error("min_volume: a fraction of the rest volume, from 0 to 1");
-             }
+                       const std::map<std::string, std::string>& options, bool quiet) {
+             RunOptions o = runOptionsOf(sets, options);
              py::gil_scoped_release release;  // the advisor may survey the step
              std::optional<CerrSilence> silence;
              if (quiet) silence.emplace();
-             return std::make_unique<Simulation>(
-                 path, overridesOf(sets, integrator, dt, substeps, autoSubsteps, duration, tolerance, threads),
-                 minVolume);
+             return std::make_unique<Simulation>(path, std::move(o));
            }),
-           py::arg("path"), py::arg("sets"), py::arg("integrator"), py::arg("dt"), py::arg("substeps"),
-           py::arg("auto_substeps"), py::arg("duration"), py::arg("tolerance"), py::arg("threads"),
-           py::arg("min_volume"), py::arg("quiet"))
+           py::arg("path"), py::arg("sets"), py::arg("options"), py::arg("quiet"))
       .def("run", &Simulation::run, py::arg("until"))
       .def("step", &Simulation::step, py::arg("n") = 1, py::arg("check") = true)
-      .def("check", &Simulation::check, py::arg("min_volume"), py::arg("end_volume"), py::arg("end_at_rest"))
+      .def("check", &Simulation::check, py::arg("min_volume") = py::none(), py::arg("end_volume") = py::none(),
+           py::arg("end_at_rest") = py::none())
       .def("render", &Simulation::render, py::arg("width"), py::arg("height"), py::arg("overlay"),
            py::arg("shadows"), py::arg("antialias"))
       .def_property_readonly("time", [](const Simulation& s) { return s.world().time(); })
@@ -583,7 +486,7 @@ PYBIND11_MODULE(_springy, m) {
       .def_property_readonly("fps", [](const Simulation& s) { return s.scene().view.render.fps; })
       .def_property_readonly("threads", [](const Simulation& s) { return s.world().threads(); })
       .def_property_readonly("name", [](const Simulation& s) { return s.scene().name; })
-      .def_property_readonly("step_untried", &Simulation::untried)
+      .def_property_readonly("step_untried", [](const Simulation& s) { return s.runner().untried(); })
       .def_property_readonly("state_hash", [](const Simulation& s) { return stateHash(s.world()); })
       .def_property_readonly("body_count", [](const Simulation& s) { return s.world().model().bodies.size(); })
       .def("body_info",
@@ -651,42 +554,36 @@ PYBIND11_MODULE(_springy, m) {
   m.def(
       "render_video",
       [](const std::vector<std::string>& scenes, const std::string& output, const std::vector<std::string>& sets,
-         std::optional<std::string> integrator, std::optional<double> dt, std::optional<int> substeps,
-         std::optional<double> duration, std::optional<unsigned> threads, std::optional<int> width,
-         std::optional<int> height, std::optional<double> fps, std::optional<int> crf, bool overlay, bool shadows,
-         bool antialias) {
+         const std::map<std::string, std::string>& options, std::optional<int> width, std::optional<int> height,
+         std::optional<double> fps, std::optional<int> crf, bool overlay, bool shadows, bool antialias) {
         RenderOptions o;
         o.scenes = scenes;
         o.output = output;
-        o.overrides = overridesOf(sets, integrator, dt, substeps, false, duration, std::nullopt, threads);
+        o.run = runOptionsOf(sets, options);
         o.render = renderOverridesOf(width, height, fps, overlay, shadows, antialias);
         o.render.crf = crf;
         runCommand("springy render", [&] { return runRender(o); });
       },
-      py::arg("scenes"), py::arg("output"), py::arg("sets"), py::arg("integrator"), py::arg("dt"),
-      py::arg("substeps"), py::arg("duration"), py::arg("threads"), py::arg("width"), py::arg("height"),
+      py::arg("scenes"), py::arg("output"), py::arg("sets"), py::arg("options"), py::arg("width"), py::arg("height"),
       py::arg("fps"), py::arg("crf"), py::arg("overlay"), py::arg("shadows"), py::arg("antialias"));
   m.def(
       "frames",
       [](const std::vector<std::string>& scenes, const std::string& output, const std::string& times, bool sheet,
-         bool sheetOnly, const std::vector<std::string>& sets, std::optional<std::string> integrator,
-         std::optional<double> dt, std::optional<int> substeps, std::optional<double> duration,
-         std::optional<unsigned> threads, std::optional<int> width, std::optional<int> height, bool overlay,
-         bool shadows, bool antialias) {
+         bool sheetOnly, const std::vector<std::string>& sets, const std::map<std::string, std::string>& options,
+         std::optional<int> width, std::optional<int> height, bool overlay, bool shadows, bool antialias) {
         FramesOptions o;
         o.scenes = scenes;
         o.output = output;
         o.times = times;
         o.sheet = sheet;
         o.sheetOnly = sheetOnly;
-        o.overrides = overridesOf(sets, integrator, dt, substeps, false, duration, std::nullopt, threads);
+        o.run = runOptionsOf(sets, options);
         o.render = renderOverridesOf(width, height, std::nullopt, overlay, shadows, antialias);
         runCommand("springy frames", [&] { return runFrames(o); });
       },
       py::arg("scenes"), py::arg("output"), py::arg("times"), py::arg("sheet"), py::arg("sheet_only"),
-      py::arg("sets"), py::arg("integrator"), py::arg("dt"), py::arg("substeps"), py::arg("duration"),
-      py::arg("threads"), py::arg("width"), py::arg("height"), py::arg("overlay"), py::arg("shadows"),
-      py::arg("antialias"));
+      py::arg("sets"), py::arg("options"), py::arg("width"), py::arg("height"), py::arg("overlay"),
+      py::arg("shadows"), py::arg("antialias"));
   m.def(
       "study",
       [](const std::string& kind, const std::string& output, const std::vector<std::string>& scenes, bool quick,
@@ -703,4 +600,19 @@ PYBIND11_MODULE(_springy, m) {
       py::arg("kind"), py::arg("output"), py::arg("scenes"), py::arg("quick"), py::arg("repeats"),
       py::arg("max_duration"));
   m.def("integrators", [] { return integratorNames(); });
+  // The run options' table (run/options.h): what load() and the commands take, as the command line does.
+  m.def("run_options", [] {
+    py::list rows;
+    for (const RunOption& o : runOptionTable()) {
+      py::dict row;
+      row["name"] = o.name;
+      row["flag"] = o.flag;
+      row["value"] = o.value;
+      row["help"] = o.help;
+      row["criterion"] = o.group == RunOption::Group::Criteria;
+      row["repeatable"] = o.repeatable;
+      rows.append(row);
+    }
+    return rows;
+  });
 }

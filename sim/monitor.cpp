@@ -1,5 +1,6 @@
 #include "sim/monitor.h"
 
+#include "sim/interrupt.h"
 #include "sim/intersections.h"
 
 #include <algorithm>
@@ -333,6 +334,22 @@ std::pair<double, uint32_t> RestWatch::largestMove(const BodyInfo& info) const {
     if (extent > moved) moved = extent, worst = i;
   }
   return {moved, worst};
+}
+
+bool stepTo(World& world, double time) {
+  while (!world.reached(time)) {
+    if (interrupted()) return false;
+    world.stepToward(time);
+    if (!world.stepProblem().empty()) return false;
+  }
+  return true;
+}
+
+std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time) {
+  if (!stepTo(world, time) && world.stepProblem().empty()) return std::nullopt;  // interrupted
+  std::optional<Failure> failure = monitor.check(world);
+  if (failure || world.stepProblem().empty()) return failure;
+  return Failure{0, world.stepCount(), world.time(), world.stepProblem()};
 }
 
 }  // namespace springy

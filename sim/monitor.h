@@ -115,4 +115,16 @@ class Monitor {
   double touchingScale_ = 0.0, touchingLowest_ = 0.0, touchingLowestTime_ = 0.0, touchingSpendable_ = 0.0;
 };
 
+// Steps `world` toward `time` until it reaches it (within half a step; the adaptive step lands on
+// it exactly). Returns false when it stopped short: the adaptive step could not meet its
+// tolerance (World::stepProblem), or an interruption was requested (sim/interrupt.h), polled
+// before every step so that a long frame (a fine step, a large model) stops at once.
+bool stepTo(World& world, double time);
+
+// stepTo, then the monitor's check: the failure, if any (the monitor's first, since a blow-up it
+// sees says more than the step's problem). Nothing when interrupted: the caller sees
+// interrupted() and stops. The one way every run (check, render, the Python module, the
+// advisor's tries, the studies) moves a world from one frame to the next.
+std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time);
+
 }  // namespace springy

@@ -558,8 +558,9 @@ StabilitySurvey surveyStability(const Model& model, Integrator integrator, doubl
   double nextFrame = frame;
   for (long i = 1; i <= intervals && survey.failure.empty(); ++i) {
     const double until = std::min(duration, static_cast<double>(i) * interval);
-    while (!world.reached(until) && world.stepProblem().empty()) world.stepToward(until);
-    if (!world.stepProblem().empty()) {
+    if (!stepTo(world, until) && world.stepProblem().empty()) {
+      survey.failure = "interrupted";  // the caller sees interrupted() and stops
+    } else if (!world.stepProblem().empty()) {
       survey.failure = world.stepProblem();
     } else if (const auto failure = monitor.check(world)) {
       survey.failure = failure->message;

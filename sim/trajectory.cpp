@@ -50,8 +50,12 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
   for (long f = 1; f <= frames; ++f) {
     const double until = static_cast<double>(f) * settings.frame;
     const auto start = std::chrono::steady_clock::now();
-    while (!world.reached(until) && world.stepProblem().empty()) world.stepToward(until);
+    const bool reached = stepTo(world, until);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!reached && world.stepProblem().empty()) {
+      path.failure = "interrupted";
+      break;
+    }
     if (const auto failure = monitor.check(world)) {
       path.failure = failure->message;
       break;

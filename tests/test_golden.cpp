@@ -19,7 +19,7 @@
 #include <sstream>
 #include <string>
 
-#include "app/runner.h"
+#include "run/load.h"
 #include "scene/scene.h"
 #include "sim/diagnostics.h"
 #include "sim/error.h"
@@ -66,7 +66,7 @@ TEST(Golden, ShowcaseScenesReachTheRecordedStateOnOneAndTwoThreads) {
                                   Integrator::Leapfrog, Integrator::RK4, Integrator::BackwardEuler,
                                   Integrator::BogackiShampine, Integrator::AdaptiveVerlet, Integrator::Vbd}) {
       const std::string key = path.stem().string() + "/" + std::string(integratorName(integrator));
-      RunOverrides overrides;
+      RunOptions overrides;
       overrides.integrator = std::string(integratorName(integrator));
       // Enough steps for every stage to act (the legacy cube's first step already has all its
       // struts); the implicit steps are costly on the bunnies, so fewer.

@@ -21,7 +21,7 @@ from . import _springy
 from ._springy import Error, RenderError, Unstable
 
 __all__ = ["load", "Simulation", "Body", "Error", "RenderError", "Unstable", "render_video", "frames",
-           "study", "load_study", "integrators"]
+           "study", "load_study", "integrators", "run_options"]
 
 
 def _toml_value(key, value):
@@ -57,6 +57,30 @@ def _settings(set):
             raise TypeError(f"set: the key {key!r} is not a dotted scene key such as 'body.0.mass'")
         out.append(f"{key}={_toml_value(key, value)}")
     return out
+
+
+def _option_text(name, value):
+    """A run option's value as the command line's text (run/options.h reads it there and here)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, _np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, _np.floating)):
+        return repr(float(value))  # the shortest text that reads back to the same double
+    if isinstance(value, str):
+        return value
+    raise TypeError(f"{name}: {type(value).__name__} is not an option value (a number, a string or a bool)")
+
+
+def _options(options):
+    """Keyword options of a run as {name: text}: None leaves an option at the scene's value."""
+    return {name: _option_text(name, value) for name, value in options.items() if value is not None}
+
+
+def run_options():
+    """The options a run takes (load's keywords, the commands' options), as the command line's
+    table lists them: [{name, flag, value, help, criterion, repeatable}]."""
+    return _springy.run_options()
 
 
 def _paths(scenes):
@@ -190,13 +214,16 @@ class Simulation:
         Raises Unstable with the body, time and message when the monitor stops the run."""
         self._core.run(float(until))
 
-    def check(self, min_volume=0.0, end_volume=0.0, end_at_rest=False):
+    def check(self, min_volume=None, end_volume=None, end_at_rest=None):
         """Runs to the scene's end and returns check --json's record of the run as a dict (path,
         scene, status, failed_body, message, integrator, dt, substeps, duration, wall_s, bodies:
         body, steps, time,
         max_strain, max_penetration, volume_min, volume_end, kinetic, gravitational, elastic,
-        at_rest). A failed criterion gives status "failed"; an instability raises Unstable."""
-        return _json.loads(self._core.check(float(min_volume), float(end_volume), bool(end_at_rest)))
+        at_rest). The criteria default to load()'s; a failed one gives status "failed"; an
+        instability raises Unstable."""
+        return _json.loads(self._core.check(None if min_volume is None else float(min_volume),
+                                            None if end_volume is None else float(end_volume),
+                                            None if end_at_rest is None else bool(end_at_rest)))
 
     def render(self, width=None, height=None, overlay=True, shadows=True, antialias=True):
         """The scene at this instant as `springy frames` draws it: an (H, W, 3) uint8 array.
@@ -204,35 +231,36 @@ class Simulation:
         return self._core.render(width, height, overlay, shadows, antialias)
 
 
-def load(path, set=None, integrator=None, dt=None, substeps=None, auto_substeps=False, duration=None,
-         tolerance=None, threads=None, min_volume=0.0, quiet=False):
+def load(path, set=None, quiet=False, auto_substeps=False, **options):
     """Loads a scene file as `springy check` does: `set` sets scene keys first, as --set KEY=VALUE
-    ({"body.0.mass": 4, "environment.drag": 0.1}); the other arguments are check's options.
-    quiet=True drops the advisor's and the bodies' notes on stderr (the step it chose, a proxy).
-    A bad file or key raises springy.Error naming the file, the line and the key."""
-    core = _springy.Simulation(_os.fspath(path), _settings(set), integrator, dt, substeps, bool(auto_substeps),
-                               duration, tolerance, threads, float(min_volume), bool(quiet))
+    ({"body.0.mass": 4, "environment.drag": 0.1}); the keywords are the command line's run options
+    (run_options(): integrator, dt, substeps, tolerance, iterations, duration, threads, min_volume,
+    end_volume, end_at_rest; substeps="auto" or auto_substeps=True as --substeps auto), checked as
+    the command line checks them. quiet=True drops the advisor's and the bodies' notes on stderr
+    (the step it chose, a proxy). A bad file, key or option raises springy.Error naming it."""
+    if auto_substeps:
+        options["substeps"] = "auto"
+    core = _springy.Simulation(_os.fspath(path), _settings(set), _options(options), bool(quiet))
     return Simulation(core)
 
 
-def render_video(scenes, output, set=None, integrator=None, dt=None, substeps=None, duration=None, threads=None,
-                 width=None, height=None, fps=None, crf=None, overlay=True, shadows=True, antialias=True):
-    """`springy render SCENES -o OUTPUT` with the same options; the same video. Raises
-    springy.Error with the command's message when it fails."""
-    _springy.render_video(_paths(scenes), _os.fspath(output), _settings(set), integrator, dt, substeps, duration,
-                          threads, width, height, fps, crf, overlay, shadows, antialias)
+def render_video(scenes, output, set=None, width=None, height=None, fps=None, crf=None, overlay=True, shadows=True,
+                 antialias=True, **options):
+    """`springy render SCENES -o OUTPUT` with the same options (the run options as load's
+    keywords); the same video. Raises springy.Error with the command's message when it fails."""
+    _springy.render_video(_paths(scenes), _os.fspath(output), _settings(set), _options(options), width, height, fps,
+                          crf, overlay, shadows, antialias)
 
 
-def frames(scenes, output=".", times=None, sheet=False, sheet_only=False, set=None, integrator=None, dt=None,
-           substeps=None, duration=None, threads=None, width=None, height=None, overlay=True, shadows=True,
-           antialias=True):
+def frames(scenes, output=".", times=None, sheet=False, sheet_only=False, set=None, width=None, height=None,
+           overlay=True, shadows=True, antialias=True, **options):
     """`springy frames SCENES -o OUTPUT --times ...` with the same options; the same PNGs."""
     if times is None:
         times = ""
     elif not isinstance(times, str):
         times = ",".join(repr(float(t)) for t in times)
     _springy.frames(_paths(scenes), _os.fspath(output), times, bool(sheet), bool(sheet_only), _settings(set),
-                    integrator, dt, substeps, duration, threads, width, height, overlay, shadows, antialias)
+                    _options(options), width, height, overlay, shadows, antialias)
 
 
 def _column(values):

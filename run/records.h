@@ -1,4 +1,4 @@
-// springy app: the results of `check` as data. One SceneRecord per scene run, one BodyResult per
+// springy run: the results of a run as data. One SceneRecord per scene run, one BodyResult per
 // body. `check --json` writes them, `check --junit` writes them as JUnit XML (a CI shows each
 // scene's body as a test case), and `sweep` keeps them in each task's result and gathers its
 // table from them.

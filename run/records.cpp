@@ -1,4 +1,4 @@
-#include "app/records.h"
+#include "run/records.h"
 
 #include <unistd.h>
 

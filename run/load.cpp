@@ -1,4 +1,4 @@
-#include "app/runner.h"
+#include "run/load.h"
 
 #include <toml++/toml.h>
 #include <cmath>
@@ -7,8 +7,7 @@
 #include <iostream>
 #include <sstream>
 
-#include "app/atomic_file.h"
-#include "app/commands.h"
+#include "run/advisor.h"
 #include "sim/error.h"
 #include "sim/limits.h"
 #include "sim/parallel.h"
@@ -110,59 +109,39 @@ SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::strin
   }
 }
 
-SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, bool advise, bool* runIsTry) {
-  SceneDesc scene = loadSceneSetting(path, overrides.sets);
+SceneDesc loadSceneWith(const std::string& path, const RunOptions& options, bool advise, bool* runIsTry) {
+  checkRunOptions(options);
+  SceneDesc scene = loadSceneSetting(path, options.sets);
   for (const BodyDesc& b : scene.bodies) {
     if (advise && !b.note.empty()) {
       std::cerr << "springy: " << b.source << ": body '" << b.name << "': " << b.note << "\n";
     }
   }
-  if (overrides.integrator && !parseIntegrator(*overrides.integrator, scene.integrator)) {
-    throw Error("--integrator: '" + *overrides.integrator + "' is not one of: " + integratorNames());
-  }
-  if (overrides.tolerance) {
-    if (!(*overrides.tolerance >= 1e-12 && *overrides.tolerance <= 0.5)) {
-      throw Error("--tolerance must be a number from 1e-12 to 0.5 (a fraction of each body's size)");
-    }
-    if (overrides.integrator && !isAdaptive(scene.integrator)) {
+  if (options.integrator) parseIntegrator(*options.integrator, scene.integrator);
+  if (options.tolerance) {
+    if (options.integrator && !isAdaptive(scene.integrator)) {
       throw Error("--tolerance needs an adaptive integrator (bs32, verlet_adaptive), not --integrator " +
-                  *overrides.integrator);
+                  *options.integrator);
     }
-    scene.tolerance = *overrides.tolerance;
+    scene.tolerance = *options.tolerance;
     if (!isAdaptive(scene.integrator)) scene.integrator = kDefaultAdaptive;
   }
-  if (overrides.dt) {
-    if (!(*overrides.dt > 0.0) || !std::isfinite(*overrides.dt)) throw Error("--dt must be a positive finite number of seconds");
-    scene.dt = *overrides.dt;
-  }
-  if (overrides.duration) {
-    if (!(*overrides.duration > 0.0) || !std::isfinite(*overrides.duration)) {
-      throw Error("--duration must be a positive finite number of seconds");
-    }
-    scene.duration = *overrides.duration;
-  }
-  if (overrides.iterations) {
-    if (*overrides.iterations < 1 || *overrides.iterations > kMaxIterations) {
-      throw Error("--iterations must be between 1 and " + std::to_string(kMaxIterations));
-    }
+  if (options.dt) scene.dt = *options.dt;
+  if (options.duration) scene.duration = *options.duration;
+  if (options.iterations) {
     if (scene.integrator != Integrator::Vbd) {
       throw Error("--iterations sets vbd's sweeps a step, but the run's integrator is " +
                   std::string(integratorName(scene.integrator)) + " (add --integrator vbd)");
     }
-    scene.iterations = *overrides.iterations;
+    scene.iterations = *options.iterations;
   }
-  if (overrides.substeps) {
-    if (*overrides.substeps < 1 || *overrides.substeps > kMaxSubsteps) {
-      throw Error("--substeps must be between 1 and " + std::to_string(kMaxSubsteps) + " (or auto)");
-    }
-    scene.substeps = *overrides.substeps;
-  }
+  if (options.substeps) scene.substeps = *options.substeps;
   if (advise && !isAdaptive(scene.integrator)) {  // the adaptive step needs no advice
-    const StepChoice choice = overrides.autoSubsteps ? StepChoice::AutoSubsteps
-                              : !scene.stepGiven && !overrides.dt && !overrides.substeps ? StepChoice::Default
+    const StepChoice choice = options.autoSubsteps ? StepChoice::AutoSubsteps
+                              : !scene.stepGiven && !options.dt && !options.substeps ? StepChoice::Default
                                                                                          : StepChoice::Warn;
     const bool deferred = runIsTry != nullptr && choice == StepChoice::Default;
-    adviseTimeStep(path, scene, choice, threadCount(overrides), std::cerr, deferred);
+    adviseTimeStep(path, scene, choice, threadCount(options), std::cerr, deferred);
     if (runIsTry) *runIsTry = deferred;
   }
   if (auto problem = runSettingsProblem(scene)) {
@@ -171,89 +150,12 @@ SceneDesc loadSceneWith(const std::string& path, const RunOverrides& overrides, 
   return scene;
 }
 
-unsigned threadCount(const RunOverrides& overrides) {
-  return overrides.threads ? *overrides.threads : defaultThreadCount();
-}
-
-std::string substepsText(int count) { return std::to_string(count) + (count == 1 ? " substep" : " substeps"); }
-
-World makeWorld(const SceneDesc& scene, const RunOverrides& overrides) {
+World makeWorld(const SceneDesc& scene, const RunOptions& options) {
   World world(buildModel(scene), scene.integrator, stepSize(scene));
   if (world.adaptive()) world.setTolerance(scene.tolerance);
   world.setIterations(scene.iterations);
-  world.setThreads(threadCount(overrides));
+  world.setThreads(threadCount(options));
   return world;
-}
-
-std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time) {
-  while (!world.reached(time)) {
-    // Polled every step, so that a long frame (a fine step, a large model) stops at once.
-    if (interrupted()) return std::nullopt;
-    world.stepToward(time);
-    if (!world.stepProblem().empty()) {
-      std::optional<Failure> failure = monitor.check(world);  // a blow-up it sees says more
-      if (failure) return failure;
-      return Failure{0, world.stepCount(), world.time(), world.stepProblem()};
-    }
-  }
-  return monitor.check(world);
-}
-
-BodyResult bodyResult(const World& world, const Monitor& monitor, const RestWatch& rest, uint32_t body) {
-  const BodyRecord& r = monitor.records()[body];
-  const BodyInfo& info = world.model().bodies[body];
-  BodyResult result;
-  result.name = info.name;
-  result.steps = world.stepCount();
-  result.time = world.time();
-  result.maxStrain = r.maxStrain;
-  result.maxPenetration = r.maxPenetration;
-  if (info.restVolume > 0.0) {  // an open surface (a cloth) encloses no volume
-    result.volumeMin = r.minVolumeRatio;
-    result.volumeEnd = r.last.volume / info.restVolume;
-  }
-  result.kinetic = r.last.kinetic;
-  result.gravitational = r.last.gravitational;
-  result.elastic = r.last.elastic;
-  result.atRest = rest.atRest(info);
-  return result;
-}
-
-std::optional<Failure> endCriteria(const World& world, const Monitor& monitor, const RestWatch& rest,
-                                   double endVolume, bool endAtRest) {
-  const std::vector<BodyInfo>& bodies = world.model().bodies;
-  for (uint32_t b = 0; b < bodies.size() && endVolume > 0.0; ++b) {
-    const BodyInfo& info = bodies[b];
-    if (!(info.restVolume > 0.0)) continue;  // an open surface: no volume to keep
-    const double ratio = monitor.records()[b].last.volume / info.restVolume;
-    if (ratio < endVolume) {
-      char what[256];
-      std::snprintf(what, sizeof what, "body '%s' ends at %.1f%% of its rest volume, below the required %.1f%%",
-                    info.name.c_str(), 100.0 * ratio, 100.0 * endVolume);
-      return Failure{b, world.stepCount(), world.time(), what, true};
-    }
-  }
-  for (uint32_t b = 0; b < bodies.size() && endAtRest; ++b) {
-    const BodyInfo& info = bodies[b];
-    if (rest.atRest(info)) continue;
-    const auto [moved, worst] = rest.largestMove(info);
-    char what[400];
-    std::snprintf(what, sizeof what,
-                  "body '%s' is not at rest at the end: in the last %.0f s its vertex %u (of the mesh) moved "
-                  "over %.3g m, more than %.3g m (%.1f%% of its size); lengthen the scene or damp the body more "
-                  "(strut_decay, hinge_decay, [environment] drag)",
-                  info.name.c_str(), RestWatch::kWindow, info.meshVertex(worst), moved,
-                  RestWatch::kFraction * info.restSize, 100.0 * RestWatch::kFraction);
-    return Failure{b, world.stepCount(), world.time(), what, true};
-  }
-  return std::nullopt;
-}
-
-uint32_t touchingVertices(const World& world, uint32_t body) {
-  const BodyInfo& info = world.model().bodies[body];
-  uint32_t count = 0;
-  for (uint32_t v = info.firstVertex; v < info.firstVertex + info.vertexCount; ++v) count += world.touching(v) ? 1 : 0;
-  return count;
 }
 
 }  // namespace springy

@@ -5,8 +5,8 @@
 
 namespace springy {
 
-Progress::Progress(std::string label, long total)
-    : label_(std::move(label)), total_(total), terminal_(::isatty(STDERR_FILENO) != 0),
+Progress::Progress(std::string label, long total, std::string unit)
+    : label_(std::move(label)), unit_(std::move(unit)), total_(total), terminal_(::isatty(STDERR_FILENO) != 0),
       start_(std::chrono::steady_clock::now()), lastPrint_(start_) {}
 
 void Progress::update(long done, const std::string& detail) {
@@ -23,10 +23,10 @@ void Progress::update(long done, const std::string& detail) {
     const int filled = static_cast<int>(fraction * width);
     for (int i = 0; i < width; ++i) bar[i] = i < filled ? '#' : '.';
     bar[width] = 0;
-    std::fprintf(stderr, "\r%s [%s] %ld/%ld frames, ETA %.0f s, %s   ", label_.c_str(), bar, done, total_, eta,
+    std::fprintf(stderr, "\r%s [%s] %ld/%ld %s, ETA %.0f s, %s   ", label_.c_str(), bar, done, total_, unit_.c_str(), eta,
                  detail.c_str());
   } else {
-    std::fprintf(stderr, "%s: %ld/%ld frames (%.0f%%), ETA %.0f s, %s\n", label_.c_str(), done, total_,
+    std::fprintf(stderr, "%s: %ld/%ld %s (%.0f%%), ETA %.0f s, %s\n", label_.c_str(), done, total_, unit_.c_str(),
                  100.0 * fraction, eta, detail.c_str());
   }
   std::fflush(stderr);

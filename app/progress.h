@@ -9,13 +9,14 @@ namespace springy {
 
 class Progress {
  public:
-  Progress(std::string label, long total);
+  // `unit`: what is counted ("frames", "runs").
+  Progress(std::string label, long total, std::string unit = "frames");
   // `detail`: per-stage figures to show after the counts.
   void update(long done, const std::string& detail);
   void finish();
 
  private:
-  std::string label_;
+  std::string label_, unit_;
   long total_;
   bool terminal_;
   std::chrono::steady_clock::time_point start_, lastPrint_;

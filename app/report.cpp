@@ -35,6 +35,7 @@
 #include "app/commands.h"
 #include "app/folder.h"
 #include "app/frame_pipeline.h"
+#include "app/gnuplot.h"
 #include "app/run_outputs.h"
 #include "app/scene_view.h"
 #include "render/image.h"
@@ -104,23 +105,6 @@ std::string pageHead(const std::string& title, const std::string& assets) {
 
 std::string badge(bool ok, const std::string& text) {
   return std::string("<span class=\"") + (ok ? "ok" : "bad") + "\">" + xmlEscaped(text) + "</span>";
-}
-
-// Runs gnuplot on `script` in its folder: no shell, so no name (a quote, a `;`) is ever read as
-// a command.
-void runGnuplot(const fs::path& script) {
-  const std::string gnuplot = findProgram("gnuplot");
-  if (gnuplot.empty()) throw Error("report: gnuplot is not installed (its plots need it): apt install gnuplot-nox");
-  if (runChild(gnuplot, {script.filename().string()}, script.parent_path().string()) != 0 && !interrupted()) {
-    throw Error("gnuplot failed on " + script.string());
-  }
-}
-
-// A gnuplot string literal (single quotes; a quote doubled).
-std::string gnuplotText(const std::string& text) {
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
-  return out + "'";
 }
 
 const char* kSvgTerminal =
@@ -746,9 +730,7 @@ int runReport(const ReportOptions& o) {
   if (o.scenes.empty() && o.sweep.empty() && o.study.empty()) {
     throw Error("report: give scenes, --sweep DIR or --study DIR");
   }
-  if (findProgram("gnuplot").empty()) {
-    throw Error("report: gnuplot is not installed (its plots need it): apt install gnuplot-nox");
-  }
+  if (!haveGnuplot()) throw Error("report: gnuplot is not installed (its plots need it): apt install gnuplot-nox");
   // Each scene gets its folder, named by its file.
   std::vector<SceneResult> scenes;
   for (const std::string& path : o.scenes) {

@@ -176,4 +176,9 @@ class ThreadPool {
 // Threads to use when the user gives none: SPRINGY_THREADS if set, else the hardware's count.
 unsigned defaultThreadCount();
 
+// The CPU time the calling thread has used [s] (CLOCK_THREAD_CPUTIME_ID). The cost of work done on
+// one thread, which other work running beside it on other cores does not inflate as it inflates
+// wall time (the studies time their runs with it while they run side by side).
+double threadCpuSeconds();
+
 }  // namespace springy

@@ -1,12 +1,12 @@
 #include "sim/trajectory.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
 #include "sim/diagnostics.h"
 #include "sim/monitor.h"
+#include "sim/parallel.h"
 
 namespace springy {
 
@@ -49,9 +49,9 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
   const double watchFrom = settings.duration - RestWatch::kWindow;
   for (long f = 1; f <= frames; ++f) {
     const double until = static_cast<double>(f) * settings.frame;
-    const auto start = std::chrono::steady_clock::now();
+    const double start = threadCpuSeconds();
     const bool reached = stepTo(world, until);
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    seconds += threadCpuSeconds() - start;
     if (!reached && world.stepProblem().empty()) {
       path.failure = "interrupted";
       break;
@@ -70,7 +70,7 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
   path.complete = path.failure.empty();
   for (uint32_t b = 0; b < model.bodies.size() && path.complete; ++b)
     path.endsAtRest.push_back(rest.atRest(model.bodies[b]));
-  path.wallSeconds = seconds;
+  path.stepSeconds = seconds;
   path.steps = world.stepCount();
   path.evaluations = world.forceEvaluations();
   path.stepStats = world.stepStats();

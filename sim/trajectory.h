@@ -39,7 +39,10 @@ struct RunPath {
   bool complete = false;                    // reached the duration under the monitor
   std::vector<bool> endsAtRest;             // [body] still over the last second (RestWatch)
   std::string failure;                      // the monitor's message otherwise
-  double wallSeconds = 0.0;                 // the stepping alone (no sampling)
+  // The stepping alone (no sampling), as the calling thread's CPU time (sim/parallel.h
+  // threadCpuSeconds): with settings.threads = 1 the stepping's whole cost, which runs side by
+  // side on other cores do not inflate (the studies run theirs so) [s].
+  double stepSeconds = 0.0;
   uint64_t steps = 0, evaluations = 0;
   StepStats stepStats;  // the adaptive integrator's
 };

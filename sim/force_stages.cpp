@@ -7,60 +7,6 @@
 #include "sim/strut.h"
 
 namespace springy {
-namespace {
-
-// One evaluation of one stage over one scope: the state, the vertices it writes and the
-// elements it walks (all of them on one thread, a thread's lists otherwise).
-struct StageCall {
-  const Model& model;
-  const StageData& data;
-  const Vec3* x;
-  const Vec3* v;
-  Vec3 air;  // the wind's air velocity at this time (0 without wind)
-  Vec3* f;
-  std::size_t begin, end;  // the vertices written
-  Elements struts, hinges, faces;
-};
-
-struct StageKind {
-  ForceStage stage;
-  std::string_view name;
-  bool (*used)(const Model&, const StageData&);  // whether a model needs this stage
-  void (*run)(const StageCall&);                 // adds (gravity: sets) its forces on [begin, end)
-};
-
-// The registry: one line per force kind, in evaluation order (ForceStage's order).
-constexpr StageKind kStageKinds[] = {
-    {ForceStage::Gravity, "gravity", [](const Model& m, const StageData&) { return m.gravity != Vec3{}; },
-     [](const StageCall& c) { setGravity(c.model, c.begin, c.end, c.f); }},
-    {ForceStage::Drag, "drag", [](const Model& m, const StageData&) { return m.drag > 0.0; },
-     [](const StageCall& c) { applyDrag(c.model, c.begin, c.end, c.air, c.v, c.f); }},
-    {ForceStage::Wind, "wind", [](const Model& m, const StageData&) { return m.wind && m.wind->pressure > 0.0; },
-     [](const StageCall& c) { applyWindPressure(c.model, c.faces, c.air, c.x, c.v, c.f); }},
-    {ForceStage::Struts, "struts", [](const Model& m, const StageData&) { return !m.struts.empty(); },
-     [](const StageCall& c) { applyStruts(c.model.struts.data(), c.struts, c.x, c.v, c.f); }},
-    {ForceStage::Hinges, "hinges", [](const Model& m, const StageData&) { return !m.hinges.empty(); },
-     [](const StageCall& c) { applyHinges(c.model.hinges.data(), c.data.hingeTerms.data(), c.hinges, c.x, c.v, c.f); }},
-    {ForceStage::Gas, "gas", [](const Model&, const StageData& d) { return !d.gasBodies.empty(); },
-     [](const StageCall& c) {
-       applyGasPressure(c.model, c.data.overpressure.data(), c.data.facesAround, c.data.areaVectors.data(), c.begin,
-                        c.end, c.f);
-     }},
-    {ForceStage::Deformation, "deformation damping", [](const Model&, const StageData& d) { return d.damped; },
-     [](const StageCall& c) { applyDeformationDamping(c.model, c.data.rigid.data(), c.begin, c.end, c.x, c.v, c.f); }},
-};
-
-constexpr bool registryInStageOrder() {
-  for (std::size_t k = 0; k < std::size(kStageKinds); ++k) {
-    if (static_cast<std::size_t>(kStageKinds[k].stage) != k) return false;
-  }
-  return true;
-}
-static_assert(registryInStageOrder(), "kStageKinds[k] is the stage of ForceStage value k");
-
-}  // namespace
-
-std::string_view forceStageName(ForceStage stage) { return kStageKinds[static_cast<std::size_t>(stage)].name; }
 
 Forces::Forces(const Model& model) : model_(&model) {
   // The stages' data: the hinges' constants, the gas bodies' face chunks, the damped bodies'
@@ -95,9 +41,7 @@ Forces::Forces(const Model& model) : model_(&model) {
   chunkMoments_.assign(rigidChunks_.size(), MassMoments{});
   data_.damped = !rigidChunks_.empty();
   // The stages this model uses, in the registry's order.
-  for (const StageKind& kind : kStageKinds) {
-    if (kind.used(*model_, data_)) stages_.push_back(kind.stage);
-  }
+  stages_ = stagesOf(*model_);
 }
 
 
@@ -276,7 +220,7 @@ void Forces::runStages(const Scope& scope, const Vec3* x, const Vec3* v, const V
                        elementsOf(&Share::hinges, m.hinges.size()),
                        elementsOf(&Share::faces, m.faces.size())};
   if (!startsWithGravity()) std::fill(f + scope.begin, f + scope.end, Vec3{});
-  for (ForceStage stage : stages_) kStageKinds[static_cast<std::size_t>(stage)].run(call);
+  for (ForceStage stage : stages_) forceKind(stage).force(call);
 }
 
 void Forces::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) const {

@@ -4,10 +4,8 @@
 // The stage list is assembled once from the model, in a fixed order, and holds only what the
 // scene uses (no wind stage without wind, no hinge stage for the legacy all-pairs model):
 //   [gravity] [drag] [wind] [struts] [hinges] [gas] [deformation damping]
-// Adding a force kind: its kernel in its own file (as sim/strut.h, sim/hinge.h, sim/forces.h),
-// a ForceStage value, and one line in the registry (kStageKinds in force_stages.cpp: its name,
-// when a model uses it, and the call of its kernel). A kernel has one entry point: over vertices
-// it takes a range, over elements an Elements selection (all of them, or a thread's list;
+// Each kind is a row of the registry (sim/force_kinds.h), which names its kernel: over vertices it
+// takes a range, over elements an Elements selection (all of them, or a thread's list;
 // sim/parallel.h).
 //
 // Threads (setThreads): the evaluation is split by vertex ownership (each thread computes the
@@ -21,28 +19,13 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/force_kinds.h"
 #include "sim/forces.h"
 #include "sim/hinge.h"
 #include "sim/model.h"
 #include "sim/parallel.h"
 
 namespace springy {
-
-// In evaluation order (the registry's order).
-enum class ForceStage : uint8_t { Gravity, Drag, Wind, Struts, Hinges, Gas, Deformation };
-std::string_view forceStageName(ForceStage stage);
-
-// What the stages read besides the model and the state, derived once from the model (the
-// constant parts) and per evaluation (the per-body sums): the stage kernels' inputs.
-struct StageData {
-  std::vector<HingeTerms> hingeTerms;  // per hinge: the force kernel's constants
-  std::vector<uint32_t> gasBodies;     // bodies that hold gas
-  VertexFaces facesAround;             // the gas stage's faces per vertex
-  std::vector<double> overpressure;    // per body, for the evaluation under way [Pa]
-  std::vector<Vec3> areaVectors;       // per face of a gas body: N of sixVolume, same evaluation
-  std::vector<RigidMotion> rigid;      // per body (rate 0: not damped), same evaluation
-  bool damped = false;                 // a body has deformation damping
-};
 
 class Forces {
  public:

@@ -285,4 +285,27 @@ void applyDeformationDamping(const Model& model, const RigidMotion* rigid, std::
   }
 }
 
+double dragDamping(const Model& model, uint32_t) { return model.drag; }
+
+double deformationDiagonal(const Model& model, uint32_t vertex) {
+  return model.bodies[model.body[vertex]].deformationDamping;
+}
+
+void dragVbdTerm(const VbdCall& call, uint32_t i, Vec3& f, Sym3& H) {
+  if (!(call.model.drag > 0.0)) return;
+  const double c = call.model.drag * call.model.mass[i];
+  const Vec3 vi = (call.x[i] - call.x0[i]) * call.invH;
+  f -= (vi - call.air) * c;
+  H.addDiagonal(c * call.invH);
+}
+
+void gasBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows) {
+  const BodyInfo& info = model.bodies[body];
+  if (!(info.gasPressure > 0.0)) return;
+  const double sum = volumeModeSum(model, info, x);
+  const double volume = enclosedVolume(model, body, x);
+  const double w2 = volume > 0.0 ? info.gasPressure * info.restVolume / (volume * volume) * sum : 0.0;
+  for (uint32_t k = 0; k < info.vertexCount; ++k) rows[k].gasStiffness = w2;
+}
+
 }  // namespace springy

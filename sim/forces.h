@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sim/kind_types.h"
 #include "sim/model.h"
 #include "sim/parallel.h"
 
@@ -99,5 +100,16 @@ RigidMotion rigidMotion(const MassMoments& moments, const Vec3& o);
 // Adds the deformation damping of vertices [begin, end); rigid[b] for each vertex's body b.
 void applyDeformationDamping(const Model& model, const RigidMotion* rigid, std::size_t begin, std::size_t end,
                              const Vec3* x, const Vec3* v, Vec3* f);
+
+// The registry's hooks (sim/force_kinds.h) of the kinds in this file that the implicit solvers
+// and the advisor take: drag's and the deformation damping's c on the diagonal of df/dv (the
+// deformation damping's rigid-motion part, a rank-6 coupling of the whole body, stays out: it
+// only lowers the bound, and Newton converges to the same step without it), drag's vbd term
+// (-c m (v - w), block c m / h), and the gas's Gershgorin rows: its breathing mode
+// omega^2 = (p0 V0 / V^2) sum_j |g_j|^2 / m_j, one eigenvalue of the body, on every row.
+double dragDamping(const Model& model, uint32_t vertex);
+double deformationDiagonal(const Model& model, uint32_t vertex);
+void dragVbdTerm(const VbdCall& call, uint32_t vertex, Vec3& f, Sym3& H);
+void gasBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows);
 
 }  // namespace springy

@@ -1,5 +1,6 @@
 #include "sim/hinge.h"
 
+#include <Eigen/Geometry>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -295,6 +296,151 @@ double hingeEnergy(const Hinge* hinges, std::size_t begin, std::size_t end, cons
     e += 0.5 * hg.stiffness * d * d * (sl * sr);
   }
   return e;
+}
+
+namespace {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+Vector3d ev(const Vec3& a) { return {a.x, a.y, a.z}; }
+
+Matrix3d skew(const Vector3d& a) {
+  Matrix3d s;
+  s << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+  return s;  // s b = a x b
+}
+
+// Derivatives of G(h, a) = -(h x a) / s, s = |a|^2 - (a.h)^2, with respect to a and h.
+void wingDerivatives(const Vector3d& h, const Vector3d& a, Matrix3d& dGda, Matrix3d& dGdh) {
+  const Vector3d q = h.cross(a);
+  const double ah = a.dot(h);
+  const double s = a.squaredNorm() - ah * ah;
+  const Vector3d r = a - ah * h;
+  dGda = -skew(h) / s + (2.0 / (s * s)) * q * r.transpose();
+  dGdh = -skew(a) * (-1.0 / s) - (2.0 * ah / (s * s)) * q * a.transpose();
+}
+
+}  // namespace
+
+bool dihedralHessian(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, Matrix12& H) {
+  HingeGeometry geo;
+  if (!hingeGeometry(x0, x1, x2, x3, geo)) return false;
+  const Vector3d e = ev(x1 - x0);
+  const double l = e.norm();
+  const Vector3d h = e / l;
+  const Matrix3d Pl = (Matrix3d::Identity() - h * h.transpose()) / l;  // d h / d x1
+  const Vector3d a = ev(x2 - x0), b = ev(x3 - x0);
+  Matrix3d Gaa, Gha, Gab, Ghb;
+  wingDerivatives(h, a, Gaa, Gha);
+  wingDerivatives(h, b, Gab, Ghb);
+  const Matrix3d Jea = Gha * Pl, Jeb = Ghb * Pl;  // through the edge direction
+  H.setZero();
+  auto blk = [&](int i, int j) { return H.block<3, 3>(3 * i, 3 * j); };
+  // g2 = G(h, a)
+  blk(2, 2) = Gaa;
+  blk(2, 1) = Jea;
+  blk(2, 0) = -Gaa - Jea;
+  // g3 = -G(h, b)
+  blk(3, 3) = -Gab;
+  blk(3, 1) = -Jeb;
+  blk(3, 0) = Gab + Jeb;
+  // g1 = -(d02 g2 + d03 g3) / l
+  const Vector3d g1 = ev(geo.grad[1]), g2 = ev(geo.grad[2]), g3 = ev(geo.grad[3]);
+  const double d02 = a.dot(h), d03 = b.dot(h);
+  // Row gradients of d02, d03 and l with respect to x0..x3.
+  Eigen::Matrix<double, 1, 3> dd02[4], dd03[4], dl[4];
+  const Eigen::Matrix<double, 1, 3> ht = h.transpose(), zero = Eigen::Matrix<double, 1, 3>::Zero();
+  dd02[2] = ht;
+  dd02[3] = zero;
+  dd02[1] = a.transpose() * Pl;
+  dd02[0] = -ht - dd02[1];
+  dd03[2] = zero;
+  dd03[3] = ht;
+  dd03[1] = b.transpose() * Pl;
+  dd03[0] = -ht - dd03[1];
+  dl[0] = -ht;
+  dl[1] = ht;
+  dl[2] = dl[3] = zero;
+  for (int k = 0; k < 4; ++k) {
+    const Matrix3d dg2 = blk(2, k), dg3 = blk(3, k);
+    blk(1, k) = -(g2 * dd02[k] + d02 * dg2 + g3 * dd03[k] + d03 * dg3) / l - (g1 / l) * dl[k];
+  }
+  // g0 = -(g1 + g2 + g3)
+  for (int k = 0; k < 4; ++k) blk(0, k) = -(Matrix3d(blk(1, k)) + Matrix3d(blk(2, k)) + Matrix3d(blk(3, k)));
+  return true;
+}
+
+bool hingeJacobian(const Hinge& hg, const Vec3* x, const Vec3* v, Matrix12& dfdx, Matrix12& dfdv, bool definite) {
+  const Vec3 &x0 = x[hg.v[0]], &x1 = x[hg.v[1]], &x2 = x[hg.v[2]], &x3 = x[hg.v[3]];
+  HingeGeometry geo;
+  // The solver's (definite) Jacobian bounds the lever the gradient divides by, so it stays
+  // finite in a crushed face; there it only approximates the faded force's derivative (hinge.h),
+  // which costs Newton iterations, not accuracy: the residual uses the force itself. The exact
+  // Jacobian uses the exact gradient.
+  if (!hingeGeometry(x0, x1, x2, x3, geo, definite ? hg.minLever[0] : 0.0, definite ? hg.minLever[1] : 0.0)) {
+    return false;
+  }
+  Eigen::Matrix<double, 12, 1> g, vel;
+  for (int i = 0; i < 4; ++i) {
+    g.segment<3>(3 * i) = ev(geo.grad[i]);
+    vel.segment<3>(3 * i) = ev(v[hg.v[i]]);
+  }
+  dfdv = -hg.damping * g * g.transpose();
+  if (definite) {
+    dfdx = -hg.stiffness * g * g.transpose();
+    return true;
+  }
+  Matrix12 H;
+  if (!dihedralHessian(x0, x1, x2, x3, H)) return false;
+  const double rate = g.dot(vel);
+  const double torque = hg.stiffness * angleDifference(geo.theta, hg.restAngle) + hg.damping * rate;
+  // d torque / d x_k = k g_k^T + d sum_j v_j^T H_jk
+  const Eigen::Matrix<double, 1, 12> dtorque = hg.stiffness * g.transpose() + hg.damping * (vel.transpose() * H);
+  dfdx = -g * dtorque - torque * H;
+  return true;
+}
+
+std::size_t hingeCount(const Model& model) { return model.hinges.size(); }
+
+void hingeVertices(const Model& model, std::size_t hinge, uint32_t* vertices) {
+  for (int a = 0; a < 4; ++a) vertices[a] = model.hinges[hinge].v[a];
+}
+
+bool hingeBlocks(const Model& model, std::size_t hinge, const Vec3* x, const Vec3* v, bool definite, Matrix12& dfdx,
+                 Matrix12& dfdv) {
+  return hingeJacobian(model.hinges[hinge], x, v, dfdx, dfdv, definite);
+}
+
+void hingeVbdTerm(const VbdCall& call, std::size_t hinge, int slot, Vec3& f, Sym3& H) {
+  const Hinge& hg = call.model.hinges[hinge];
+  const Vec3* x = call.x;
+  HingeGeometry g;
+  if (!hingeGeometry(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]], g, hg.minLever[0], hg.minLever[1])) return;
+  double rate = 0.0;
+  for (int b = 0; b < 4; ++b) rate += dot(g.grad[b], x[hg.v[b]] - call.x0[hg.v[b]]);
+  rate *= call.invH;
+  f -= g.grad[slot] * (hg.stiffness * angleDifference(g.theta, hg.restAngle) + hg.damping * rate);
+  H.addOuter(g.grad[slot], hg.stiffness + hg.damping * call.invH);
+}
+
+void hingeBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows) {
+  const BodyInfo& info = model.bodies[body];
+  const double* invMass = model.invMass.data();
+  HingeGeometry g;
+  for (uint32_t h = info.firstHinge; h < info.firstHinge + info.hingeCount; ++h) {
+    const Hinge& hg = model.hinges[h];
+    if (!hingeGradient(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]], g, hg.minLever[0], hg.minLever[1])) continue;
+    double w[4];  // |g_i| / sqrt(m_i), 0 for pinned vertices
+    for (int a = 0; a < 4; ++a) w[a] = std::sqrt(lengthSquared(g.grad[a]) * invMass[hg.v[a]]);
+    const double sum = w[0] + w[1] + w[2] + w[3];
+    for (int a = 0; a < 4; ++a) {
+      if (w[a] == 0.0) continue;  // pinned
+      RowBound& row = rows[hg.v[a] - info.firstVertex];
+      row.hingeStiffness += hg.stiffness * w[a] * sum;
+      row.hingeDamping += hg.damping * w[a] * sum;
+    }
+  }
 }
 
 }  // namespace springy

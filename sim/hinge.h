@@ -31,6 +31,7 @@
 
 #include <cstddef>
 
+#include "sim/kind_types.h"
 #include "sim/model.h"
 #include "sim/parallel.h"
 
@@ -79,5 +80,30 @@ void applyHinges(const Hinge* hinges, const HingeTerms* terms, Elements elements
 
 // Elastic energy 1/2 k (theta - theta0)^2 summed over hinges [begin, end).
 double hingeEnergy(const Hinge* hinges, std::size_t begin, std::size_t end, const Vec3* x);
+
+// Hessian of the dihedral angle, H(3i + a, 3j + b) = d^2 theta / d x_i,a d x_j,b for the four
+// hinge vertices in hinge order. Returns false for degenerate geometry. With g_i = d theta / d x_i
+// as above, written g2 = G(h, x2 - x0), g3 = -G(h, x3 - x0) with G(h, a) = -(h x a) / (|a|^2 -
+// (a.h)^2), g1 = -((x02.h) g2 + (x03.h) g3) / l and g0 = -(g1 + g2 + g3), it follows by the chain
+// rule through h = (x1 - x0) / l: an independent derivation of the same quantity as Tamstorf &
+// Grinspun 2013, "Discrete bending forces and their Jacobians", in the form that matches this
+// gradient.
+bool dihedralHessian(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, Matrix12& hessian);
+
+// Jacobians of one hinge's forces on its four vertices: dfdx(3i + a, 3j + b) = d f_i,a / d x_j,b,
+// and d f / d v. definite: -k g g^T for dfdx (Gauss-Newton), else exact. Returns false for
+// degenerate geometry.
+bool hingeJacobian(const Hinge& hinge, const Vec3* x, const Vec3* v, Matrix12& dfdx, Matrix12& dfdv, bool definite);
+
+// The registry's hooks for hinges (sim/force_kinds.h): four vertices per element, in hinge order.
+std::size_t hingeCount(const Model& model);
+void hingeVertices(const Model& model, std::size_t hinge, uint32_t* vertices);
+bool hingeBlocks(const Model& model, std::size_t hinge, const Vec3* x, const Vec3* v, bool definite, Matrix12& dfdx,
+                 Matrix12& dfdv);
+// vbd: the force on the hinge's vertex in `slot` with its damping at v = (x - x0) / h, and the
+// Gauss-Newton block (k + d / h) g g^T of that vertex's g = d theta / d x.
+void hingeVbdTerm(const VbdCall& call, std::size_t hinge, int slot, Vec3& f, Sym3& H);
+// Gershgorin rows: k and d times w_a sum_b w_b, w = |g| / sqrt(m) (0 for a pinned vertex).
+void hingeBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows);
 
 }  // namespace springy

@@ -6,7 +6,6 @@
 
 #include "sim/colliders.h"
 #include "sim/forces.h"
-#include "sim/hinge.h"
 #include "sim/force_stages.h"
 
 namespace springy {
@@ -15,120 +14,7 @@ namespace {
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
-Vector3d ev(const Vec3& a) { return {a.x, a.y, a.z}; }
-
-Matrix3d skew(const Vector3d& a) {
-  Matrix3d s;
-  s << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
-  return s;  // s b = a x b
-}
-
-// Derivatives of G(h, a) = -(h x a) / s, s = |a|^2 - (a.h)^2, with respect to a and h.
-void wingDerivatives(const Vector3d& h, const Vector3d& a, Matrix3d& dGda, Matrix3d& dGdh) {
-  const Vector3d q = h.cross(a);
-  const double ah = a.dot(h);
-  const double s = a.squaredNorm() - ah * ah;
-  const Vector3d r = a - ah * h;
-  dGda = -skew(h) / s + (2.0 / (s * s)) * q * r.transpose();
-  dGdh = -skew(a) * (-1.0 / s) - (2.0 * ah / (s * s)) * q * a.transpose();
-}
-
 }  // namespace
-
-bool strutJacobian(const Strut& st, const Vec3* x, const Vec3* v, Matrix3d& dfdx, Matrix3d& dfdv, bool definite) {
-  const Vec3 xij = x[st.j] - x[st.i];
-  const double l = length(xij);
-  if (!(l > 0.0)) return false;
-  const Vector3d u = ev(xij / l);
-  const Matrix3d uu = u * u.transpose();
-  const Matrix3d P = Matrix3d::Identity() - uu;
-  const double transverse = 1.0 - st.restLength / l;
-  dfdx = st.stiffness * uu + st.stiffness * (definite ? std::max(0.0, transverse) : transverse) * P;
-  if (!definite) {
-    const Vector3d vij = ev(v[st.j] - v[st.i]);
-    dfdx += (st.damping / l) * (u * (P * vij).transpose() + vij.dot(u) * P);
-  }
-  dfdv = st.damping * uu;
-  return true;
-}
-
-bool dihedralHessian(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, Matrix12& H) {
-  HingeGeometry geo;
-  if (!hingeGeometry(x0, x1, x2, x3, geo)) return false;
-  const Vector3d e = ev(x1 - x0);
-  const double l = e.norm();
-  const Vector3d h = e / l;
-  const Matrix3d Pl = (Matrix3d::Identity() - h * h.transpose()) / l;  // d h / d x1
-  const Vector3d a = ev(x2 - x0), b = ev(x3 - x0);
-  Matrix3d Gaa, Gha, Gab, Ghb;
-  wingDerivatives(h, a, Gaa, Gha);
-  wingDerivatives(h, b, Gab, Ghb);
-  const Matrix3d Jea = Gha * Pl, Jeb = Ghb * Pl;  // through the edge direction
-  H.setZero();
-  auto blk = [&](int i, int j) { return H.block<3, 3>(3 * i, 3 * j); };
-  // g2 = G(h, a)
-  blk(2, 2) = Gaa;
-  blk(2, 1) = Jea;
-  blk(2, 0) = -Gaa - Jea;
-  // g3 = -G(h, b)
-  blk(3, 3) = -Gab;
-  blk(3, 1) = -Jeb;
-  blk(3, 0) = Gab + Jeb;
-  // g1 = -(d02 g2 + d03 g3) / l
-  const Vector3d g1 = ev(geo.grad[1]), g2 = ev(geo.grad[2]), g3 = ev(geo.grad[3]);
-  const double d02 = a.dot(h), d03 = b.dot(h);
-  // Row gradients of d02, d03 and l with respect to x0..x3.
-  Eigen::Matrix<double, 1, 3> dd02[4], dd03[4], dl[4];
-  const Eigen::Matrix<double, 1, 3> ht = h.transpose(), zero = Eigen::Matrix<double, 1, 3>::Zero();
-  dd02[2] = ht;
-  dd02[3] = zero;
-  dd02[1] = a.transpose() * Pl;
-  dd02[0] = -ht - dd02[1];
-  dd03[2] = zero;
-  dd03[3] = ht;
-  dd03[1] = b.transpose() * Pl;
-  dd03[0] = -ht - dd03[1];
-  dl[0] = -ht;
-  dl[1] = ht;
-  dl[2] = dl[3] = zero;
-  for (int k = 0; k < 4; ++k) {
-    const Matrix3d dg2 = blk(2, k), dg3 = blk(3, k);
-    blk(1, k) = -(g2 * dd02[k] + d02 * dg2 + g3 * dd03[k] + d03 * dg3) / l - (g1 / l) * dl[k];
-  }
-  // g0 = -(g1 + g2 + g3)
-  for (int k = 0; k < 4; ++k) blk(0, k) = -(Matrix3d(blk(1, k)) + Matrix3d(blk(2, k)) + Matrix3d(blk(3, k)));
-  return true;
-}
-
-bool hingeJacobian(const Hinge& hg, const Vec3* x, const Vec3* v, Matrix12& dfdx, Matrix12& dfdv, bool definite) {
-  const Vec3 &x0 = x[hg.v[0]], &x1 = x[hg.v[1]], &x2 = x[hg.v[2]], &x3 = x[hg.v[3]];
-  HingeGeometry geo;
-  // The solver's (definite) Jacobian bounds the lever the gradient divides by, so it stays
-  // finite in a crushed face; there it only approximates the faded force's derivative (hinge.h),
-  // which costs Newton iterations, not accuracy: the residual uses the force itself. The exact
-  // Jacobian uses the exact gradient.
-  if (!hingeGeometry(x0, x1, x2, x3, geo, definite ? hg.minLever[0] : 0.0, definite ? hg.minLever[1] : 0.0)) {
-    return false;
-  }
-  Eigen::Matrix<double, 12, 1> g, vel;
-  for (int i = 0; i < 4; ++i) {
-    g.segment<3>(3 * i) = ev(geo.grad[i]);
-    vel.segment<3>(3 * i) = ev(v[hg.v[i]]);
-  }
-  dfdv = -hg.damping * g * g.transpose();
-  if (definite) {
-    dfdx = -hg.stiffness * g * g.transpose();
-    return true;
-  }
-  Matrix12 H;
-  if (!dihedralHessian(x0, x1, x2, x3, H)) return false;
-  const double rate = g.dot(vel);
-  const double torque = hg.stiffness * angleDifference(geo.theta, hg.restAngle) + hg.damping * rate;
-  // d torque / d x_k = k g_k^T + d sum_j v_j^T H_jk
-  const Eigen::Matrix<double, 1, 12> dtorque = hg.stiffness * g.transpose() + hg.damping * (vel.transpose() * H);
-  dfdx = -g * dtorque - torque * H;
-  return true;
-}
 
 ImplicitSolver::ImplicitSolver(const Model& model, ImplicitSettings settings) : settings_(settings) {
   n_ = model.vertexCount();
@@ -140,13 +26,18 @@ ImplicitSolver::ImplicitSolver(const Model& model, ImplicitSettings settings) : 
     }
   };
   for (uint32_t i = 0; i < n_; ++i) pattern(i, i);
-  for (const Strut& s : model.struts) {
-    pattern(s.i, s.j);
-    pattern(s.j, s.i);
-  }
-  for (const Hinge& h : model.hinges) {
-    for (uint32_t a : h.v) {
-      for (uint32_t b : h.v) pattern(a, b);
+  // Every pair of vertices that share an element of a kind with a Jacobian.
+  stages_ = stagesOf(model);
+  uint32_t corners[4];
+  for (ForceStage stage : stages_) {
+    const ForceKind& kind = forceKind(stage);
+    if (!kind.jacobian) continue;
+    kinds_.push_back({&kind, {}});
+    for (std::size_t e = 0, count = kind.elementCount(model); e < count; ++e) {
+      kind.elementVertices(model, e, corners);
+      for (int a = 0; a < kind.elementSize; ++a) {
+        for (int b = 0; b < kind.elementSize; ++b) pattern(corners[a], corners[b]);
+      }
     }
   }
   K_.resize(dim, dim);
@@ -156,13 +47,13 @@ ImplicitSolver::ImplicitSolver(const Model& model, ImplicitSettings settings) : 
   A_ = K_;
   diagonal_.resize(n_);
   for (uint32_t i = 0; i < n_; ++i) diagonal_[i] = findBlock(i, i);
-  for (const Strut& s : model.struts) {
-    strutBlocks_.push_back(findBlock(s.i, s.j));
-    strutBlocks_.push_back(findBlock(s.j, s.i));
-  }
-  for (const Hinge& h : model.hinges) {
-    for (uint32_t a : h.v) {
-      for (uint32_t b : h.v) hingeBlocks_.push_back(findBlock(a, b));
+  for (KindBlocks& kb : kinds_) {
+    const ForceKind& kind = *kb.kind;
+    for (std::size_t e = 0, count = kind.elementCount(model); e < count; ++e) {
+      kind.elementVertices(model, e, corners);
+      for (int a = 0; a < kind.elementSize; ++a) {
+        for (int b = 0; b < kind.elementSize; ++b) kb.blocks.push_back(findBlock(corners[a], corners[b]));
+      }
     }
   }
   x1_.assign(n_, Vec3{});
@@ -213,33 +104,28 @@ void ImplicitSolver::addBlock(Eigen::SparseMatrix<double>& m, const Block& blk, 
 void ImplicitSolver::assemble(const Model& model, const Vec3* x, const Vec3* v, bool definite) {
   std::fill(K_.valuePtr(), K_.valuePtr() + K_.nonZeros(), 0.0);
   std::fill(D_.valuePtr(), D_.valuePtr() + D_.nonZeros(), 0.0);
-  // Drag and the deformation damping's diagonal part -c m_i (its rigid-motion part, a rank-6
-  // coupling of the whole body, stays out of the matrix: Newton converges to the same step).
-  for (std::size_t i = 0; i < n_; ++i) {
-    const double rate = model.drag + model.bodies[model.body[i]].deformationDamping;
+  // The kinds' diagonal damping, -c m_i (drag; the deformation damping's local part: its
+  // rigid-motion part, a rank-6 coupling of the whole body, stays out of the matrix, and Newton
+  // converges to the same step).
+  for (uint32_t i = 0; i < n_; ++i) {
+    const double rate = diagonalDamping(model, stages_, i);
     if (rate > 0.0) addBlock(D_, diagonal_[i], Matrix3d::Identity(), -rate * model.mass[i]);
   }
-  Matrix3d kx, kv;
-  for (std::size_t s = 0; s < model.struts.size(); ++s) {
-    const Strut& st = model.struts[s];
-    if (!strutJacobian(st, x, v, kx, kv, definite)) continue;
-    addBlock(K_, diagonal_[st.i], kx, -1.0);
-    addBlock(K_, diagonal_[st.j], kx, -1.0);
-    addBlock(K_, strutBlocks_[2 * s], kx, 1.0);
-    addBlock(K_, strutBlocks_[2 * s + 1], kx, 1.0);
-    addBlock(D_, diagonal_[st.i], kv, -1.0);
-    addBlock(D_, diagonal_[st.j], kv, -1.0);
-    addBlock(D_, strutBlocks_[2 * s], kv, 1.0);
-    addBlock(D_, strutBlocks_[2 * s + 1], kv, 1.0);
-  }
-  Matrix12 hx, hv;
-  for (std::size_t k = 0; k < model.hinges.size(); ++k) {
-    if (!hingeJacobian(model.hinges[k], x, v, hx, hv, definite)) continue;
-    for (int a = 0; a < 4; ++a) {
-      for (int b = 0; b < 4; ++b) {
-        const Block& blk = hingeBlocks_[16 * k + static_cast<std::size_t>(4 * a + b)];
-        addBlock(K_, blk, hx.block<3, 3>(3 * a, 3 * b), 1.0);
-        addBlock(D_, blk, hv.block<3, 3>(3 * a, 3 * b), 1.0);
+  // Each element's blocks of df/dx and df/dv, kind by kind in the registry's order.
+  Matrix12 jx, jv;
+  for (const KindBlocks& kb : kinds_) {
+    const ForceKind& kind = *kb.kind;
+    const std::size_t size = static_cast<std::size_t>(kind.elementSize);
+    for (std::size_t e = 0, count = kind.elementCount(model); e < count; ++e) {
+      if (!kind.jacobian(model, e, x, v, definite, jx, jv)) continue;
+      const Block* blocks = &kb.blocks[e * size * size];
+      for (std::size_t a = 0; a < size; ++a) {
+        for (std::size_t b = 0; b < size; ++b) {
+          const Block& blk = blocks[a * size + b];
+          const auto r = static_cast<Eigen::Index>(3 * a), c = static_cast<Eigen::Index>(3 * b);
+          addBlock(K_, blk, jx.block<3, 3>(r, c), 1.0);
+          addBlock(D_, blk, jv.block<3, 3>(r, c), 1.0);
+        }
       }
     }
   }

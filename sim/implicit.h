@@ -17,15 +17,11 @@
 // solver therefore iterates with the definite part: strut k u u^T + k max(0, 1 - l0/l) (I - u u^T)
 // (Choi & Ko 2002), hinge k g g^T (Gauss-Newton) and the exact damping Jacobians D. Newton's
 // fixed point, the backward Euler step, does not depend on that choice; only the convergence
-// rate does. The exact Jacobians are here too (strutJacobian, hingeJacobian with
-// definite = false) and are checked against finite differences by the tests.
-//
-// Hinge Jacobian: with g_i = d theta / d x_i as in hinge.h, written g2 = G(h, x2 - x0),
-// g3 = -G(h, x3 - x0) with G(h, a) = -(h x a) / (|a|^2 - (a.h)^2), g1 = -((x02.h) g2 +
-// (x03.h) g3) / l and g0 = -(g1 + g2 + g3), the Hessian of theta follows by the chain rule
-// through h = (x1 - x0) / l. It is an independent derivation of the same quantity as
-// Tamstorf & Grinspun 2013, "Discrete bending forces and their Jacobians" (their eq. for the
-// Hessian of the dihedral angle), in the form that matches springy's gradient.
+// rate does. Each force kind gives its own Jacobian blocks (sim/force_kinds.h: strutJacobian in
+// strut.h, hingeJacobian and the dihedral angle's Hessian in hinge.h, exact with definite =
+// false, checked against finite differences by the tests); the solver assembles them over the
+// registry's kinds that have elements, the kinds' diagonal damping (drag, the deformation
+// damping's local part), and the gas as a rank-one term of its own.
 //
 // Contact inside the solve: with a large step, projecting a vertex back onto a collider after
 // the step would move it by up to a step's travel (0.23 m for 14 m/s at 1/60 s) against its
@@ -47,28 +43,12 @@
 #include <utility>
 #include <vector>
 
+#include "sim/force_kinds.h"
 #include "sim/model.h"
 
 namespace springy {
 
 class Forces;
-
-using Matrix12 = Eigen::Matrix<double, 12, 12>;
-
-// Jacobian blocks of one strut: dfdx = d f_i / d x_j (then d f_i/d x_i = d f_j/d x_j = -dfdx,
-// d f_j / d x_i = dfdx), and likewise dfdv. definite: the positive semidefinite part used by
-// the solver (see above). Returns false when the two ends coincide (no direction).
-bool strutJacobian(const Strut& strut, const Vec3* x, const Vec3* v, Eigen::Matrix3d& dfdx, Eigen::Matrix3d& dfdv,
-                   bool definite);
-
-// Hessian of the dihedral angle, H(3i + a, 3j + b) = d^2 theta / d x_i,a d x_j,b for the four
-// hinge vertices in hinge order. Returns false for degenerate geometry.
-bool dihedralHessian(const Vec3& x0, const Vec3& x1, const Vec3& x2, const Vec3& x3, Matrix12& hessian);
-
-// Jacobians of one hinge's forces on its four vertices: dfdx(3i + a, 3j + b) = d f_i,a / d x_j,b,
-// and d f / d v. definite: -k g g^T for dfdx (Gauss-Newton), else exact. Returns false for
-// degenerate geometry.
-bool hingeJacobian(const Hinge& hinge, const Vec3* x, const Vec3* v, Matrix12& dfdx, Matrix12& dfdv, bool definite);
 
 struct ImplicitSettings {
   int maxNewton = 10;           // Newton iterations per step
@@ -136,8 +116,14 @@ class ImplicitSolver {
   std::size_t n_;
   Eigen::SparseMatrix<double> K_, D_, A_;
   std::vector<Block> diagonal_;  // per vertex
-  std::vector<Block> strutBlocks_;  // per strut: (i, j), (j, i)
-  std::vector<Block> hingeBlocks_;  // per hinge: 16 blocks (a, b) row-major
+  // The model's force kinds with elements and a Jacobian (sim/force_kinds.h), in the registry's
+  // order, each with its elements' blocks: per element, (a, b) row-major over its vertices.
+  struct KindBlocks {
+    const ForceKind* kind;
+    std::vector<Block> blocks;
+  };
+  std::vector<KindBlocks> kinds_;
+  std::vector<ForceStage> stages_;  // the model's stage list (the diagonal damping's kinds)
   // Workspace.
   std::vector<Vec3> x1_, f_, v0_, vTrial_;
   Eigen::VectorXd rhs_, dv_, r_, z_, p_, q_, precond_, filter_;

@@ -173,48 +173,16 @@ double criticalStep(Integrator integrator, double omega, double gamma, double ho
 
 std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t body) {
   const BodyInfo& info = model.bodies[body];
+  const std::vector<ForceStage> stages = stagesOf(model);
   std::vector<RowBound> rows(info.vertexCount);
   for (uint32_t k = 0; k < info.vertexCount; ++k) {
     rows[k].vertex = info.firstVertex + k;
-    rows[k].drag = model.drag + info.deformationDamping;  // both -c m_i on the diagonal (the
-                                                          // rigid part only lowers the bound)
+    // The kinds' -c m_i on the diagonal (the deformation damping's rigid part only lowers the bound).
+    rows[k].drag = diagonalDamping(model, stages, info.firstVertex + k);
   }
-  // In products with the inverse masses (0 for a pinned vertex, which adds nothing): this is
-  // made again every few steps of an adaptive run, where its divisions and square roots were
-  // a fifth of the run.
-  const double* invMass = model.invMass.data();
-  auto row = [&](uint32_t v) -> RowBound& { return rows[v - info.firstVertex]; };
-  for (uint32_t s = info.firstStrut; s < info.firstStrut + info.strutCount; ++s) {
-    const Strut& st = model.struts[s];
-    // The geometric term |1 - L0/l| passes 1 only below half the rest length.
-    const double l2 = lengthSquared(x[st.j] - x[st.i]);
-    const double stretch =
-        l2 > 0.0 && 4.0 * l2 < st.restLength * st.restLength ? st.restLength / std::sqrt(l2) - 1.0 : 1.0;
-    const double k = st.stiffness * stretch, d = st.damping;
-    const double ii = invMass[st.i], jj = invMass[st.j], ij = std::sqrt(ii * jj);
-    row(st.i).strutStiffness += k * (ii + ij);
-    row(st.i).strutDamping += d * (ii + ij);
-    row(st.j).strutStiffness += k * (jj + ij);
-    row(st.j).strutDamping += d * (jj + ij);
-  }
-  HingeGeometry g;
-  for (uint32_t h = info.firstHinge; h < info.firstHinge + info.hingeCount; ++h) {
-    const Hinge& hg = model.hinges[h];
-    if (!hingeGradient(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]], g, hg.minLever[0], hg.minLever[1])) continue;
-    double w[4];  // |g_i| / sqrt(m_i), 0 for pinned vertices
-    for (int a = 0; a < 4; ++a) w[a] = std::sqrt(lengthSquared(g.grad[a]) * invMass[hg.v[a]]);
-    const double sum = w[0] + w[1] + w[2] + w[3];
-    for (int a = 0; a < 4; ++a) {
-      if (w[a] == 0.0) continue;  // pinned
-      row(hg.v[a]).hingeStiffness += hg.stiffness * w[a] * sum;
-      row(hg.v[a]).hingeDamping += hg.damping * w[a] * sum;
-    }
-  }
-  if (info.gasPressure > 0.0) {
-    const double sum = volumeModeSum(model, info, x);
-    const double volume = enclosedVolume(model, body, x);
-    const double w2 = volume > 0.0 ? info.gasPressure * info.restVolume / (volume * volume) * sum : 0.0;
-    for (RowBound& r : rows) r.gasStiffness = w2;
+  // Each kind's rates, in the registry's order (sim/force_kinds.h boundRows).
+  for (ForceStage stage : stages) {
+    if (const auto bound = forceKind(stage).boundRows) bound(model, x, body, rows.data());
   }
   return rows;
 }
@@ -229,9 +197,9 @@ BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integr
   std::vector<Rates> rates(rows.size());
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const RowBound& r = rows[i];
-    const double w2 =
-        scale.strutStiffness * r.strutStiffness + scale.hingeStiffness * r.hingeStiffness + scale.gasStiffness * r.gasStiffness;
-    const double gamma = scale.strutDamping * r.strutDamping + scale.hingeDamping * r.hingeDamping + r.drag;
+    const double w2 = scale.strutStiffness * r.strutStiffness + scale.hingeStiffness * r.hingeStiffness +
+                      scale.gasStiffness * r.gasStiffness + r.otherStiffness;
+    const double gamma = scale.strutDamping * r.strutDamping + scale.hingeDamping * r.hingeDamping + r.drag + r.otherDamping;
     rates[i] = {std::sqrt(w2), gamma, i};
     out.omegaMax = std::max(out.omegaMax, rates[i].omega);
     out.gammaMax = std::max(out.gammaMax, gamma);

@@ -36,23 +36,13 @@
 #include <string>
 #include <vector>
 
+#include "sim/force_kinds.h"
 #include "sim/model.h"
 #include "sim/world.h"
 
 namespace springy {
 
 // Mass-normalised Gershgorin row sums of one vertex [1/s^2 for stiffness, 1/s for damping].
-struct RowBound {
-  uint32_t vertex;
-  double strutStiffness = 0, hingeStiffness = 0, strutDamping = 0, hingeDamping = 0, drag = 0;
-  // The enclosed gas's breathing mode, omega^2 = (p0 V0 / V^2) sum_j |g_j|^2 / m_j: one
-  // eigenvalue of the whole body, added to every row (the largest eigenvalue of a sum is at
-  // most the sum of the largest eigenvalues). The pressure's curvature term p d^2V/dx^2 is left
-  // out: it vanishes at rest, but in a strongly compressed body the limit is then optimistic
-  // (docs/stability.md, "stiff gas": measured 0.3-0.8 of the prediction).
-  double gasStiffness = 0;
-};
-
 // Multipliers of a body's spring constants (P scaled by f multiplies stiffness by 1/f^2, T by f
 // multiplies damping by 1/f).
 struct ParameterScale {

@@ -169,4 +169,92 @@ __attribute__((target_clones("avx2", "default"))) StrutMeasures measureStruts(co
   return m;
 }
 
+namespace {
+
+Eigen::Vector3d ev(const Vec3& a) { return {a.x, a.y, a.z}; }
+
+}  // namespace
+
+bool strutJacobian(const Strut& st, const Vec3* x, const Vec3* v, Eigen::Matrix3d& dfdx, Eigen::Matrix3d& dfdv, bool definite) {
+  const Vec3 xij = x[st.j] - x[st.i];
+  const double l = length(xij);
+  if (!(l > 0.0)) return false;
+  const Eigen::Vector3d u = ev(xij / l);
+  const Eigen::Matrix3d uu = u * u.transpose();
+  const Eigen::Matrix3d P = Eigen::Matrix3d::Identity() - uu;
+  const double transverse = 1.0 - st.restLength / l;
+  dfdx = st.stiffness * uu + st.stiffness * (definite ? std::max(0.0, transverse) : transverse) * P;
+  if (!definite) {
+    const Eigen::Vector3d vij = ev(v[st.j] - v[st.i]);
+    dfdx += (st.damping / l) * (u * (P * vij).transpose() + vij.dot(u) * P);
+  }
+  dfdv = st.damping * uu;
+  return true;
+}
+
+std::size_t strutCount(const Model& model) { return model.struts.size(); }
+
+void strutVertices(const Model& model, std::size_t strut, uint32_t* vertices) {
+  vertices[0] = model.struts[strut].i;
+  vertices[1] = model.struts[strut].j;
+}
+
+bool strutBlocks(const Model& model, std::size_t strut, const Vec3* x, const Vec3* v, bool definite, Matrix12& dfdx,
+                 Matrix12& dfdv) {
+  Eigen::Matrix3d kx, kv;
+  if (!strutJacobian(model.struts[strut], x, v, kx, kv, definite)) return false;
+  dfdx.block<3, 3>(0, 0) = -kx;
+  dfdx.block<3, 3>(0, 3) = kx;
+  dfdx.block<3, 3>(3, 0) = kx;
+  dfdx.block<3, 3>(3, 3) = -kx;
+  dfdv.block<3, 3>(0, 0) = -kv;
+  dfdv.block<3, 3>(0, 3) = kv;
+  dfdv.block<3, 3>(3, 0) = kv;
+  dfdv.block<3, 3>(3, 3) = -kv;
+  return true;
+}
+
+void strutVbdTerm(const VbdCall& call, std::size_t strut, int slot, Vec3& f, Sym3& H) {
+  const Strut& s = call.model.struts[strut];
+  const uint32_t i = slot == 0 ? s.i : s.j, j = slot == 0 ? s.j : s.i;
+  const Vec3* x = call.x;
+  const Vec3 d = x[j] - x[i];
+  const double l = length(d);
+  if (!(l > 0.0)) return;
+  const double invL = 1.0 / l;
+  const Vec3 u = d * invL;
+  const Vec3 vi = (x[i] - call.x0[i]) * call.invH;
+  const Vec3 relative = (x[j] - call.x0[j]) * call.invH - vi;
+  f += u * (s.stiffness * (l - s.restLength) + s.damping * dot(relative, u));
+  H.addOuter(u, s.stiffness + s.damping * call.invH);
+  const double transverse = s.stiffness * std::max(0.0, 1.0 - s.restLength * invL);
+  if (transverse > 0.0) {
+    H.addDiagonal(transverse);
+    H.addOuter(u, -transverse);
+  }
+}
+
+void strutBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows) {
+  const BodyInfo& info = model.bodies[body];
+  // In products with the inverse masses (0 for a pinned vertex, which adds nothing): this is
+  // made again every few steps of an adaptive run, where its divisions and square roots were
+  // a fifth of the run.
+  const double* invMass = model.invMass.data();
+  for (uint32_t s = info.firstStrut; s < info.firstStrut + info.strutCount; ++s) {
+    const Strut& st = model.struts[s];
+    // The geometric term |1 - L0/l| passes 1 only below half the rest length.
+    const double l2 = lengthSquared(x[st.j] - x[st.i]);
+    const double stretch =
+        l2 > 0.0 && 4.0 * l2 < st.restLength * st.restLength ? st.restLength / std::sqrt(l2) - 1.0 : 1.0;
+    const double k = st.stiffness * stretch, d = st.damping;
+    const double ii = invMass[st.i], jj = invMass[st.j], ij = std::sqrt(ii * jj);
+    RowBound& ri = rows[st.i - info.firstVertex];
+    RowBound& rj = rows[st.j - info.firstVertex];
+    ri.strutStiffness += k * (ii + ij);
+    ri.strutDamping += d * (ii + ij);
+    rj.strutStiffness += k * (jj + ij);
+    rj.strutDamping += d * (jj + ij);
+  }
+}
+
 }  // namespace springy

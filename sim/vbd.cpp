@@ -51,23 +51,28 @@ bool solveSym3(const Sym3& h, const Vec3& b, Vec3& x) {
 
 VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), iterations_(iterations) {
   n_ = model.vertexCount();
-  // Elements around each vertex, in element order.
-  const auto buildLists = [&](std::size_t count, int slots, auto vertexOf, std::vector<uint32_t>& start,
-                              std::vector<uint32_t>& list) {
-    start.assign(n_ + 1, 0);
+  // Each kind's elements around each vertex, in element order.
+  uint32_t corners[4];
+  for (ForceStage stage : stagesOf(model)) {
+    const ForceKind& kind = forceKind(stage);
+    if (!kind.vbdElement && !kind.vbdVertex) continue;
+    KindTerms& terms = kinds_.emplace_back(KindTerms{&kind, {}, {}});
+    if (!kind.vbdElement) continue;
+    const std::size_t count = kind.elementCount(model);
+    const auto size = static_cast<uint32_t>(kind.elementSize);
+    terms.start.assign(n_ + 1, 0);
     for (std::size_t e = 0; e < count; ++e) {
-      for (int s = 0; s < slots; ++s) ++start[vertexOf(e, s) + 1];
+      kind.elementVertices(model, e, corners);
+      for (uint32_t s = 0; s < size; ++s) ++terms.start[corners[s] + 1];
     }
-    for (std::size_t i = 0; i < n_; ++i) start[i + 1] += start[i];
-    list.resize(start[n_]);
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < n_; ++i) terms.start[i + 1] += terms.start[i];
+    terms.list.resize(terms.start[n_]);
+    std::vector<uint32_t> fill(terms.start.begin(), terms.start.end() - 1);
     for (std::size_t e = 0; e < count; ++e) {
-      for (int s = 0; s < slots; ++s) list[fill[vertexOf(e, s)]++] = static_cast<uint32_t>(e * slots + s);
+      kind.elementVertices(model, e, corners);
+      for (uint32_t s = 0; s < size; ++s) terms.list[fill[corners[s]]++] = static_cast<uint32_t>(e) * size + s;
     }
-  };
-  buildLists(model.struts.size(), 2, [&](std::size_t e, int s) { return s == 0 ? model.struts[e].i : model.struts[e].j; },
-             strutStart_, strutList_);
-  buildLists(model.hinges.size(), 4, [&](std::size_t e, int s) { return model.hinges[e].v[s]; }, hingeStart_, hingeList_);
+  }
   gasSlot_.assign(model.bodies.size(), -1);
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     if (model.bodies[b].gasPressure > 0.0) {
@@ -85,10 +90,14 @@ VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), itera
     neighbours[a].push_back(b);
     neighbours[b].push_back(a);
   };
-  for (const Strut& s : model.struts) link(s.i, s.j);
-  for (const Hinge& h : model.hinges) {
-    for (int a = 0; a < 4; ++a) {
-      for (int b = a + 1; b < 4; ++b) link(h.v[a], h.v[b]);
+  for (const KindTerms& terms : kinds_) {
+    const ForceKind& kind = *terms.kind;
+    if (!kind.vbdElement) continue;
+    for (std::size_t e = 0, count = kind.elementCount(model); e < count; ++e) {
+      kind.elementVertices(model, e, corners);
+      for (int a = 0; a < kind.elementSize; ++a) {
+        for (int b = a + 1; b < kind.elementSize; ++b) link(corners[a], corners[b]);
+      }
     }
   }
   for (const Triangle& f : model.faces) {
@@ -156,42 +165,20 @@ void VbdSolver::startAccelerations(const Vec3* x, const Vec3* v, double t) {
 void VbdSolver::blockSystem(uint32_t i, const Vec3* x, double h, Vec3& force, Sym3& hessian, Vec3& gradient) const {
   const Model& m = *model_;
   const double mass = m.mass[i], inertia = mass / (h * h), invH = 1.0 / h;
-  const Vec3 xi = x[i], vi = (xi - x0_[i]) * invH;
+  const Vec3 xi = x[i];
   Vec3 f = (y_[i] - xi) * inertia;
   Sym3 H;
   H.addDiagonal(inertia);
-  if (m.drag > 0.0) {
-    const double c = m.drag * mass;
-    f -= (vi - air_) * c;
-    H.addDiagonal(c * invH);
-  }
-  for (uint32_t k = strutStart_[i]; k < strutStart_[i + 1]; ++k) {
-    const Strut& s = m.struts[strutList_[k] >> 1];
-    const uint32_t j = (strutList_[k] & 1) ? s.i : s.j;
-    const Vec3 d = x[j] - xi;
-    const double l = length(d);
-    if (!(l > 0.0)) continue;
-    const double invL = 1.0 / l;
-    const Vec3 u = d * invL;
-    const Vec3 relative = (x[j] - x0_[j]) * invH - vi;
-    f += u * (s.stiffness * (l - s.restLength) + s.damping * dot(relative, u));
-    H.addOuter(u, s.stiffness + s.damping * invH);
-    const double transverse = s.stiffness * std::max(0.0, 1.0 - s.restLength * invL);
-    if (transverse > 0.0) {
-      H.addDiagonal(transverse);
-      H.addOuter(u, -transverse);
+  // Each kind's term, in the registry's order (drag, struts, hinges).
+  const VbdCall call{m, x, x0_.data(), invH, air_};
+  for (const KindTerms& terms : kinds_) {
+    const ForceKind& kind = *terms.kind;
+    if (kind.vbdVertex) kind.vbdVertex(call, i, f, H);
+    if (!kind.vbdElement) continue;
+    const auto size = static_cast<uint32_t>(kind.elementSize);
+    for (uint32_t k = terms.start[i]; k < terms.start[i + 1]; ++k) {
+      kind.vbdElement(call, terms.list[k] / size, static_cast<int>(terms.list[k] % size), f, H);
     }
-  }
-  for (uint32_t k = hingeStart_[i]; k < hingeStart_[i + 1]; ++k) {
-    const Hinge& hg = m.hinges[hingeList_[k] >> 2];
-    const int slot = static_cast<int>(hingeList_[k] & 3);
-    HingeGeometry g;
-    if (!hingeGeometry(x[hg.v[0]], x[hg.v[1]], x[hg.v[2]], x[hg.v[3]], g, hg.minLever[0], hg.minLever[1])) continue;
-    double rate = 0.0;
-    for (int b = 0; b < 4; ++b) rate += dot(g.grad[b], x[hg.v[b]] - x0_[hg.v[b]]);
-    rate *= invH;
-    f -= g.grad[slot] * (hg.stiffness * angleDifference(g.theta, hg.restAngle) + hg.damping * rate);
-    H.addOuter(g.grad[slot], hg.stiffness + hg.damping * invH);
   }
   gradient = Vec3{};
   const int32_t slot = gasSlot_[m.body[i]];

@@ -12,7 +12,8 @@
 // "shares a strut, a hinge or a face"), so a colour's vertices are independent and are updated
 // together, on any number of threads, with the same result. v = (x - x0) / h at the end.
 //
-// The terms of H_i, each positive semidefinite so that every block solve is a descent step:
+// The terms of H_i, each positive semidefinite so that every block solve is a descent step, each
+// from its force kind's vbd term (sim/force_kinds.h; the gas's below, here):
 //   strut (Choi & Ko 2002's definite part, as the implicit solver's): k u u^T + k max(0, 1 - l0/l)
 //     (I - u u^T), its dashpot d / h u u^T (the damping force with v = (x - x0) / h);
 //   hinge (Gauss-Newton): (k + d / h) g_i g_i^T, g_i = d theta / d x_i;
@@ -40,30 +41,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "sim/force_kinds.h"
 #include "sim/forces.h"
 #include "sim/model.h"
+#include "sim/sym3.h"
 
 namespace springy {
 
 class Forces;
-
-// A symmetric 3x3 matrix: xx, yy, zz, xy, xz, yz.
-struct Sym3 {
-  double a[6] = {0, 0, 0, 0, 0, 0};
-  void addDiagonal(double s) {
-    a[0] += s;
-    a[1] += s;
-    a[2] += s;
-  }
-  void addOuter(const Vec3& u, double s) {  // += s u u^T
-    a[0] += s * u.x * u.x;
-    a[1] += s * u.y * u.y;
-    a[2] += s * u.z * u.z;
-    a[3] += s * u.x * u.y;
-    a[4] += s * u.x * u.z;
-    a[5] += s * u.y * u.z;
-  }
-};
 
 struct VbdStats {
   uint64_t steps = 0;
@@ -114,10 +99,15 @@ class VbdSolver {
   const Model* model_;
   int iterations_;
   std::size_t n_;
-  // Per vertex, compressed: the struts (index) around it, the hinges (index * 4 + its slot), the
-  // faces (for the gas).
-  std::vector<uint32_t> strutStart_, strutList_, hingeStart_, hingeList_;
-  VertexFaces faces_;
+  // The model's force kinds with a vbd term (sim/force_kinds.h), in the registry's order; for
+  // a kind with elements, the elements around each vertex, compressed: vertex i's are
+  // list[start[i]] to list[start[i + 1] - 1], each element * size + the vertex's slot in it.
+  struct KindTerms {
+    const ForceKind* kind;
+    std::vector<uint32_t> start, list;
+  };
+  std::vector<KindTerms> kinds_;
+  VertexFaces faces_;  // per vertex, its faces (for the gas)
   std::vector<uint32_t> colourStart_, colourVertices_;
   std::vector<int32_t> gasSlot_;  // per body: its index in volume_, or -1
   std::vector<uint32_t> gasBodies_;

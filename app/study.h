@@ -31,8 +31,9 @@ inline constexpr std::array<Integrator, 7> kStabilityStudied = {
     Integrator::ExplicitEuler, Integrator::SymplecticEuler, Integrator::VelocityVerlet, Integrator::Leapfrog,
     Integrator::RK4,           Integrator::BackwardEuler,   Integrator::Vbd};
 
-// The order of convergence theory gives an integrator.
-double theoreticalOrder(Integrator integrator);
+// The force evaluations' worth of work a step of the integrator costs, for ordering runs by
+// cost: the table's explicit count, or an implicit step's Newton iterations or sweeps (about 16).
+double stepCost(Integrator integrator);
 
 // The machine, as the studies' pages state it: cores, processor, how runs are timed.
 std::string machine();

@@ -256,8 +256,7 @@ std::vector<Point> measurePoints(const std::vector<AccuracyCase>& cases, int rep
     for (Integrator integrator : kAll) {
       for (double dt : cases[c].dts) {
         jobs.push_back({c, integrator, dt});
-        const double evaluations = integrator == Integrator::RK4 ? 4 : integrator == Integrator::BackwardEuler ? 20 : 1;
-        cost.push_back(static_cast<double>(cases[c].model.vertexCount()) * cases[c].endTime / dt * evaluations);
+        cost.push_back(static_cast<double>(cases[c].model.vertexCount()) * cases[c].endTime / dt * stepCost(integrator));
       }
     }
   }
@@ -349,9 +348,9 @@ std::string caseSection(const fs::path& out, const AccuracyCase& c, const std::v
     int used = 0;
     const double order = measuredOrder(points, c.name, integrator, &used);
     orders << c.name << "," << integratorName(integrator) << "," << fmt("%.4f", order) << ","
-           << theoreticalOrder(integrator) << "," << used << "\n";
+           << integratorTraits(integrator).order << "," << used << "\n";
     md << "| " << integratorName(integrator) << " | " << (std::isnan(order) ? std::string("n/a") : fmt("%.2f", order))
-       << " (" << theoreticalOrder(integrator) << ") |";
+       << " (" << integratorTraits(integrator).order << ") |";
     for (const Point& p : points) {
       if (p.caseName != c.name || p.integrator != integrator) continue;
       md << " " << (p.stable ? fmt("%.2e", p.error) : std::string("unstable")) << " / "

@@ -35,13 +35,9 @@ std::string cpuModel() {
 
 }  // namespace
 
-double theoreticalOrder(Integrator i) {
-  switch (i) {
-    case Integrator::VelocityVerlet:
-    case Integrator::Leapfrog: return 2;
-    case Integrator::RK4: return 4;
-    default: return 1;
-  }
+double stepCost(Integrator integrator) {
+  const IntegratorTraits& t = integratorTraits(integrator);
+  return t.implicit ? 16.0 : t.evaluations;
 }
 
 std::string machine() {

@@ -96,8 +96,7 @@ SceneRuns runScene(const std::string& path, const StudyOptions& o, const std::ve
   for (const ContactPoint& r : runs) {
     Integrator integrator = Integrator::RK4;
     parseIntegrator(r.method, integrator);
-    const double evaluations = integrator == Integrator::RK4 ? 4 : integrator == Integrator::Vbd ? 16 : 1;
-    cost.push_back(r.tolerance > 0 ? 1.0 / r.tolerance : evaluations / r.dt);
+    cost.push_back(r.tolerance > 0 ? 1.0 / r.tolerance : stepCost(integrator) / r.dt);
   }
   runInParallel("springy study contact: " + s.name, cost, [&](std::size_t i) {
     ContactPoint& r = runs[i];

@@ -343,7 +343,7 @@ int runStability(const StudyOptions& o) {
   for (std::size_t c = 0; c < cases.size(); ++c) {
     for (Integrator integrator : kStabilityStudied) {
       jobs.emplace_back(c, integrator);
-      cost.push_back(static_cast<double>(cases[c].model.vertexCount()) * (isImplicit(integrator) ? 20 : 1));
+      cost.push_back(static_cast<double>(cases[c].model.vertexCount()) * stepCost(integrator));
     }
   }
   std::vector<CaseRow> rows(jobs.size());

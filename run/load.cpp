@@ -129,7 +129,7 @@ SceneDesc loadSceneWith(const std::string& path, const RunOptions& options, bool
   if (options.dt) scene.dt = *options.dt;
   if (options.duration) scene.duration = *options.duration;
   if (options.iterations) {
-    if (scene.integrator != Integrator::Vbd) {
+    if (!integratorTraits(scene.integrator).takesIterations) {
       throw Error("--iterations sets vbd's sweeps a step, but the run's integrator is " +
                   std::string(integratorName(scene.integrator)) + " (add --integrator vbd)");
     }

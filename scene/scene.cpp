@@ -779,7 +779,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
       if (!isAdaptive(scene.integrator)) scene.integrator = kDefaultAdaptive;  // a tolerance asks for one
     }
     scene.iterations = r.integer("iterations", scene.iterations, 1, kMaxIterations);
-    if (const toml::node* n = r.get("iterations"); n != nullptr && scene.integrator != Integrator::Vbd) {
+    if (const toml::node* n = r.get("iterations"); n != nullptr && !integratorTraits(scene.integrator).takesIterations) {
       // Only vbd sweeps; any other integrator would ignore the key without a word.
       r.fail(*n, "iterations", "sets vbd's sweeps a step, but the integrator is " +
                                    std::string(integratorName(scene.integrator)) + " (set integrator = \"vbd\" or remove the key)");

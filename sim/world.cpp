@@ -16,22 +16,6 @@
 namespace springy {
 namespace {
 
-struct IntegratorEntry {
-  Integrator value;
-  std::string_view name;
-};
-constexpr IntegratorEntry kIntegrators[] = {
-    {Integrator::ExplicitEuler, "explicit_euler"},
-    {Integrator::SymplecticEuler, "symplectic_euler"},
-    {Integrator::VelocityVerlet, "verlet"},
-    {Integrator::Leapfrog, "leapfrog"},
-    {Integrator::RK4, "rk4"},
-    {Integrator::BackwardEuler, "backward_euler"},
-    {Integrator::BogackiShampine, "bs32"},
-    {Integrator::AdaptiveVerlet, "verlet_adaptive"},
-    {Integrator::Vbd, "vbd"},
-};
-
 // The largest of fn(i) over [begin, end) (0 for none); a NaN wins (it must stop the step).
 template <class F>
 double largestOver(std::size_t begin, std::size_t end, F&& fn) {
@@ -54,29 +38,6 @@ void foldLargest(std::atomic<double>& out, double value) {
 
 }  // namespace
 
-std::string_view integratorName(Integrator integrator) {
-  for (const IntegratorEntry& e : kIntegrators) {
-    if (e.value == integrator) return e.name;
-  }
-  return "?";
-}
-
-bool parseIntegrator(std::string_view name, Integrator& out) {
-  for (const IntegratorEntry& e : kIntegrators) {
-    if (e.name == name) {
-      out = e.value;
-      return true;
-    }
-  }
-  return false;
-}
-
-std::string integratorNames() {
-  std::string s;
-  for (const IntegratorEntry& e : kIntegrators) s += (s.empty() ? "" : ", ") + std::string(e.name);
-  return s;
-}
-
 World::World(Model model, Integrator integrator, double dt)
     : model_(std::make_unique<Model>(std::move(model))), integrator_(integrator), dt_(dt) {
   assert(dt > 0.0);
@@ -86,13 +47,11 @@ World::World(Model model, Integrator integrator, double dt)
   }
   dampingLayers_ = model_->colliders.dampingLayers();
   movingColliders_ = model_->colliders.moving();
-  if (movingColliders_) {
-    if (isImplicit(integrator)) {
-      throw Error("colliders that move are not supported with " + std::string(integratorName(integrator)) +
-                  " (its solve holds the colliders still); use rk4, verlet or an adaptive step (--tolerance)");
-    }
-    kinks_ = model_->colliders.kinks();
+  if (!integratorRefuses(integrator, movingColliders_, false).empty()) {
+    throw Error("colliders that move are not supported with " + std::string(integratorName(integrator)) +
+                " (its solve holds the colliders still); use rk4, verlet or an adaptive step (--tolerance)");
   }
+  if (movingColliders_) kinks_ = model_->colliders.kinks();
   // Vertices held hard to a collider ([[attach]]) follow it, not their body's pin track.
   std::set<uint32_t> attachedHard;
   for (const Model::PinTrack& track : model_->pinTracks) attachedHard.insert(track.vertices.begin(), track.vertices.end());
@@ -115,7 +74,7 @@ World::World(Model model, Integrator integrator, double dt)
   for (const Model::Attachment& a : model_->attachments) {
     if (std::isfinite(a.release)) kinks_.push_back(a.release);
   }
-  if (!model_->attachments.empty() && isImplicit(integrator)) {
+  if (!integratorRefuses(integrator, false, !model_->attachments.empty()).empty()) {
     throw Error("soft attachments ([[attach]] with a period) are not supported with " +
                 std::string(integratorName(integrator)) +
                 " (its solve does not have them); use rk4, verlet or an adaptive step (--tolerance)");

@@ -30,21 +30,10 @@
 
 #include "sim/contact.h"
 #include "sim/force_stages.h"
+#include "sim/integrators.h"
 #include "sim/model.h"
 
 namespace springy {
-
-enum class Integrator {
-  ExplicitEuler,    // x += dt v(t), v += dt a(t)                            order 1
-  SymplecticEuler,  // v += dt a(t), x += dt v(t + dt)                       order 1
-  VelocityVerlet,   // x += dt v + dt^2/2 a, v += dt/2 (a + a_new)           order 2, 1 eval/step
-  Leapfrog,         // kick dt/2, drift dt, kick dt/2 (forces at both ends)  order 2, 2 evals/step
-  RK4,              // classical Runge-Kutta, forces at all four stages      order 4
-  BackwardEuler,    // implicit: Newton + CG on M dv = h f(x + h v1, v1)     order 1 (sim/implicit.h)
-  BogackiShampine,  // adaptive: embedded 3(2) pair, step chosen by a tolerance order 3, 3 evals/step
-  AdaptiveVerlet,   // adaptive: velocity Verlet, error from a1 - a0              order 2, 1 eval/step
-  Vbd,              // implicit: vertex block descent on backward Euler's potential  order 1 (sim/vbd.h)
-};
 
 // The adaptive integrator's step statistics (World::stepStats).
 struct StepStats {
@@ -53,31 +42,6 @@ struct StepStats {
   double smallest = 0.0, largest = 0.0;  // accepted steps [s] (the smallest: not one shortened to land on a stop)
   uint64_t landed = 0;                   // accepted steps shortened to land on a stop
 };
-
-// The integrators that choose their own step by a tolerance (World::setTolerance), and the one
-// a tolerance alone selects.
-inline bool isAdaptive(Integrator i) { return i == Integrator::BogackiShampine || i == Integrator::AdaptiveVerlet; }
-constexpr Integrator kDefaultAdaptive = Integrator::AdaptiveVerlet;
-
-// The integrators that solve for the step's end (no stability limit on the step).
-inline bool isImplicit(Integrator i) { return i == Integrator::BackwardEuler || i == Integrator::Vbd; }
-
-// The symplectic integrators: at a stable step their energy is bounded but, read at an instant,
-// swings about its conserved value by up to 1/(1 - (omega h)^2/4) of a mode's (5 times at
-// omega h = 1.8); the others' only falls at a stable step (RK4 and Bogacki-Shampine damp every
-// mode they keep, backward Euler every mode), or rises at every step (explicit Euler).
-inline bool energySwings(Integrator i) {
-  return i == Integrator::SymplecticEuler || i == Integrator::VelocityVerlet || i == Integrator::Leapfrog ||
-         i == Integrator::AdaptiveVerlet;
-}
-
-// Name used in scene files and on the command line ("explicit_euler", "rk4", ...).
-std::string_view integratorName(Integrator integrator);
-// Parses a name; returns false if unknown.
-bool parseIntegrator(std::string_view name, Integrator& out);
-// Comma-separated list of all names, for error messages.
-std::string integratorNames();
-
 
 class ImplicitSolver;
 class VbdSolver;

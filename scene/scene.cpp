@@ -13,8 +13,8 @@
 
 #include "sim/error.h"
 #include "sim/limits.h"
-#include "sim/mesh_io.h"
-#include "sim/proxy.h"
+#include "mesh/mesh_io.h"
+#include "mesh/proxy.h"
 #include "sim/shapes.h"
 
 namespace springy {
@@ -461,7 +461,7 @@ TriMesh makeShape(Reader& r, const std::string& shape) {
 // Step: a mesh file made fit to simulate. A cloth is validated as it is (one piece, every edge
 // in one or two consistently oriented triangles, no zero-area triangle), never wrapped; a mesh
 // that needs it (proxy = "auto": not a closed manifold, badly shaped or far finer than a body
-// needs; proxy = "always") is simulated through a proxy that wraps it (sim/proxy.h), the file's
+// needs; proxy = "always") is simulated through a proxy that wraps it (mesh/proxy.h), the file's
 // mesh kept in b.drawMesh to be drawn; any other is validated as a closed body.
 TriMesh loadBodyMesh(const std::string& file, const std::string& proxy, int proxyVertices, BodyDesc& b) {
   TriMesh mesh = readWeldedMesh(file);

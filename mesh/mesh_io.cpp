@@ -1,4 +1,4 @@
-#include "sim/mesh_io.h"
+#include "mesh/mesh_io.h"
 
 #include <sys/resource.h>
 #include <sys/wait.h>

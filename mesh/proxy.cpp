@@ -1,6 +1,6 @@
 // The one translation unit that includes CGAL (heavy, header-only, GPL-3.0-or-later packages):
 // keep it that way, so that only this file pays CGAL's compile time and -frounding-math.
-#include "sim/proxy.h"
+#include "mesh/proxy.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "sim/error.h"
-#include "sim/mesh_io.h"
+#include "mesh/mesh_io.h"
 
 namespace springy {
 

@@ -1,4 +1,4 @@
-// Google Benchmark for the simulation proxy (sim/proxy.h): alpha wrap + isotropic remeshing of
+// Google Benchmark for the simulation proxy (mesh/proxy.h): alpha wrap + isotropic remeshing of
 // 100k-triangle inputs to a target vertex count (the issue asks for under 5 s), and needsProxy.
 // Run: build-bench/bench/bench_proxy --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "sim/embedding.h"
-#include "sim/mesh_io.h"
-#include "sim/proxy.h"
+#include "mesh/mesh_io.h"
+#include "mesh/proxy.h"
 #include "sim/shapes.h"
 
 namespace springy {

@@ -15,7 +15,7 @@
 
 #include "scene/scene.h"
 #include "sim/error.h"
-#include "sim/mesh_io.h"
+#include "mesh/mesh_io.h"
 #include "sim/model.h"
 
 namespace springy::fuzz {

@@ -93,101 +93,138 @@ struct VideoEncoder::Impl {
       std::lock_guard lock(timingMutex);
       timings = EncodeTimings{};
     }
+    checkSettings(p, s);
+    // A fraction, not the rounded integer: 1.4 frames/s written as 1 played 40% slow. MPEG-4
+    // part 2 allows time base denominators up to 65535.
+    const AVRational rate = av_d2q(s.fps, 65535);
+    try {
+      openOutput();
+      const AVCodec* enc = chooseEncoder();
+      openCodec(enc, rate);
+      allocateFrame();
+      createConverter();
+      writeHeader();
+    } catch (...) {
+      close();
+      throw;
+    }
+  }
+
+  // Step of open(): a size the encoder takes (positive and even, for yuv420p) and a sane rate.
+  static void checkSettings(const std::string& p, const VideoSettings& s) {
     if (s.width <= 0 || s.height <= 0 || s.width % 2 || s.height % 2)
       throw RenderError("VideoEncoder '" + p + "': width and height must be positive and even, got " +
                         std::to_string(s.width) + "x" + std::to_string(s.height));
     if (!(s.fps >= 0.01 && s.fps <= 1000.0))
       throw RenderError("VideoEncoder '" + p + "': bad frame rate " + std::to_string(s.fps));
-    // A fraction, not the rounded integer: 1.4 frames/s written as 1 played 40% slow. MPEG-4
-    // part 2 allows time base denominators up to 65535.
-    const AVRational rate = av_d2q(s.fps, 65535);
-    try {
-      int ret = avformat_alloc_output_context2(&fmt, nullptr, nullptr, p.c_str());
-      if (ret < 0 || !fmt) {
-        ret = avformat_alloc_output_context2(&fmt, nullptr, "mp4", p.c_str());
-        if (ret < 0 || !fmt) fail("cannot choose an output format", ret);
-      }
-      // Open the file first: an unwritable path fails before any encoder work.
-      if (!(fmt->oformat->flags & AVFMT_NOFILE)) {
-        ret = avio_open(&fmt->pb, p.c_str(), AVIO_FLAG_WRITE);
-        if (ret < 0) fail("cannot open the output file", ret);
-        fileOpen = true;
-      }
-      const AVCodec* enc = s.forceFallback ? nullptr : avcodec_find_encoder(AV_CODEC_ID_H264);
-      fallback = enc == nullptr;
-      if (fallback) {
-        if (!s.allowFallback && !s.forceFallback)
-          throw RenderError("VideoEncoder '" + p + "': no H.264 encoder (libx264) available");
-        enc = avcodec_find_encoder(AV_CODEC_ID_MPEG4);
-        if (!enc) throw RenderError("VideoEncoder '" + p + "': neither H.264 nor MPEG-4 encoder available");
-      }
-      codecName = enc->name;
-      stream = avformat_new_stream(fmt, nullptr);
-      if (!stream) throw RenderError("VideoEncoder '" + p + "': cannot create a stream");
-      codec = avcodec_alloc_context3(enc);
-      if (!codec) throw RenderError("VideoEncoder '" + p + "': cannot allocate the codec context");
-      codec->codec_id = enc->id;
-      codec->width = s.width;
-      codec->height = s.height;
-      codec->time_base = av_inv_q(rate);
-      codec->framerate = rate;
-      codec->pix_fmt = AV_PIX_FMT_YUV420P;
-      codec->gop_size = std::max(1, static_cast<int>(std::lround(s.fps * 2.0)));
-      codec->thread_count = std::max(0, s.threads);
-      codec->color_primaries = AVCOL_PRI_BT709;
-      codec->color_trc = AVCOL_TRC_BT709;
-      codec->colorspace = AVCOL_SPC_BT709;
-      codec->color_range = AVCOL_RANGE_MPEG;
-      stream->time_base = codec->time_base;
-      stream->avg_frame_rate = rate;
-      if (fmt->oformat->flags & AVFMT_GLOBALHEADER) codec->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
-      AVDictionary* opts = nullptr;
-      if (!fallback) {
-        av_dict_set(&opts, "preset", s.preset.c_str(), 0);
-        av_dict_set(&opts, "crf", std::to_string(std::clamp(s.crf, 0, 51)).c_str(), 0);
-      } else {
-        // mpeg4 has no CRF: a fixed quantiser roughly matching the requested quality.
-        codec->flags |= AV_CODEC_FLAG_QSCALE;
-        codec->global_quality = FF_QP2LAMBDA * std::clamp(s.crf / 8, 2, 31);
-        codec->max_b_frames = 0;
-      }
-      ret = avcodec_open2(codec, enc, &opts);
-      av_dict_free(&opts);
-      if (ret < 0) fail(std::string("cannot open encoder ") + enc->name, ret);
-      ret = avcodec_parameters_from_context(stream->codecpar, codec);
-      if (ret < 0) fail("cannot copy codec parameters", ret);
+  }
 
-      frame = av_frame_alloc();
-      packet = av_packet_alloc();
-      if (!frame || !packet) throw RenderError("VideoEncoder '" + p + "': out of memory");
-      frame->format = codec->pix_fmt;
-      frame->width = s.width;
-      frame->height = s.height;
-      frame->color_primaries = AVCOL_PRI_BT709;
-      frame->color_trc = AVCOL_TRC_BT709;
-      frame->colorspace = AVCOL_SPC_BT709;
-      frame->color_range = AVCOL_RANGE_MPEG;
-      ret = av_frame_get_buffer(frame, 0);
-      if (ret < 0) fail("cannot allocate a frame", ret);
-
-      sws = sws_getContext(s.width, s.height, AV_PIX_FMT_RGBA, s.width, s.height,
-                           AV_PIX_FMT_YUV420P, SWS_BILINEAR | SWS_ACCURATE_RND | SWS_FULL_CHR_H_INP,
-                           nullptr, nullptr, nullptr);
-      if (!sws) throw RenderError("VideoEncoder '" + p + "': cannot create the colour converter");
-      // RGBA input is full range; output limited-range BT.709, matching the stream tags.
-      const int* bt709 = sws_getCoefficients(SWS_CS_ITU709);
-      sws_setColorspaceDetails(sws, bt709, 1, bt709, 0, 0, 1 << 16, 1 << 16);
-
-      AVDictionary* muxOpts = nullptr;
-      av_dict_set(&muxOpts, "movflags", "+faststart", 0);
-      ret = avformat_write_header(fmt, &muxOpts);
-      av_dict_free(&muxOpts);
-      if (ret < 0) fail("cannot write the file header", ret);
-      headerWritten = true;
-    } catch (...) {
-      close();
-      throw;
+  // Step of open(): the container (from the extension, else MP4) and the file, opened first so
+  // that an unwritable path fails before any encoder work.
+  void openOutput() {
+    int ret = avformat_alloc_output_context2(&fmt, nullptr, nullptr, path.c_str());
+    if (ret < 0 || !fmt) {
+      ret = avformat_alloc_output_context2(&fmt, nullptr, "mp4", path.c_str());
+      if (ret < 0 || !fmt) fail("cannot choose an output format", ret);
     }
+    if (!(fmt->oformat->flags & AVFMT_NOFILE)) {
+      ret = avio_open(&fmt->pb, path.c_str(), AVIO_FLAG_WRITE);
+      if (ret < 0) fail("cannot open the output file", ret);
+      fileOpen = true;
+    }
+  }
+
+  // Step of open(): H.264, or MPEG-4 part 2 where it is missing (if allowed) or forced.
+  const AVCodec* chooseEncoder() {
+    const AVCodec* enc = settings.forceFallback ? nullptr : avcodec_find_encoder(AV_CODEC_ID_H264);
+    fallback = enc == nullptr;
+    if (fallback) {
+      if (!settings.allowFallback && !settings.forceFallback)
+        throw RenderError("VideoEncoder '" + path + "': no H.264 encoder (libx264) available");
+      enc = avcodec_find_encoder(AV_CODEC_ID_MPEG4);
+      if (!enc) throw RenderError("VideoEncoder '" + path + "': neither H.264 nor MPEG-4 encoder available");
+    }
+    codecName = enc->name;
+    return enc;
+  }
+
+  // Step of open(): the stream and the encoder at the frame rate, yuv420p, BT.709 tagged, a
+  // keyframe every two seconds; x264 at the preset and CRF, or mpeg4 at a matching quantiser.
+  void openCodec(const AVCodec* enc, AVRational rate) {
+    const VideoSettings& s = settings;
+    stream = avformat_new_stream(fmt, nullptr);
+    if (!stream) throw RenderError("VideoEncoder '" + path + "': cannot create a stream");
+    codec = avcodec_alloc_context3(enc);
+    if (!codec) throw RenderError("VideoEncoder '" + path + "': cannot allocate the codec context");
+    codec->codec_id = enc->id;
+    codec->width = s.width;
+    codec->height = s.height;
+    codec->time_base = av_inv_q(rate);
+    codec->framerate = rate;
+    codec->pix_fmt = AV_PIX_FMT_YUV420P;
+    codec->gop_size = std::max(1, static_cast<int>(std::lround(s.fps * 2.0)));
+    codec->thread_count = std::max(0, s.threads);
+    codec->color_primaries = AVCOL_PRI_BT709;
+    codec->color_trc = AVCOL_TRC_BT709;
+    codec->colorspace = AVCOL_SPC_BT709;
+    codec->color_range = AVCOL_RANGE_MPEG;
+    stream->time_base = codec->time_base;
+    stream->avg_frame_rate = rate;
+    if (fmt->oformat->flags & AVFMT_GLOBALHEADER) codec->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+    AVDictionary* opts = nullptr;
+    if (!fallback) {
+      av_dict_set(&opts, "preset", s.preset.c_str(), 0);
+      av_dict_set(&opts, "crf", std::to_string(std::clamp(s.crf, 0, 51)).c_str(), 0);
+    } else {
+      // mpeg4 has no CRF: a fixed quantiser roughly matching the requested quality.
+      codec->flags |= AV_CODEC_FLAG_QSCALE;
+      codec->global_quality = FF_QP2LAMBDA * std::clamp(s.crf / 8, 2, 31);
+      codec->max_b_frames = 0;
+    }
+    int ret = avcodec_open2(codec, enc, &opts);
+    av_dict_free(&opts);
+    if (ret < 0) fail(std::string("cannot open encoder ") + enc->name, ret);
+    ret = avcodec_parameters_from_context(stream->codecpar, codec);
+    if (ret < 0) fail("cannot copy codec parameters", ret);
+  }
+
+  // Step of open(): the frame the colour conversion writes into (tagged as the stream) and the
+  // packet the encoder hands back.
+  void allocateFrame() {
+    frame = av_frame_alloc();
+    packet = av_packet_alloc();
+    if (!frame || !packet) throw RenderError("VideoEncoder '" + path + "': out of memory");
+    frame->format = codec->pix_fmt;
+    frame->width = settings.width;
+    frame->height = settings.height;
+    frame->color_primaries = AVCOL_PRI_BT709;
+    frame->color_trc = AVCOL_TRC_BT709;
+    frame->colorspace = AVCOL_SPC_BT709;
+    frame->color_range = AVCOL_RANGE_MPEG;
+    const int ret = av_frame_get_buffer(frame, 0);
+    if (ret < 0) fail("cannot allocate a frame", ret);
+  }
+
+  // Step of open(): the RGBA -> yuv420p converter. RGBA input is full range; output
+  // limited-range BT.709, matching the stream tags.
+  void createConverter() {
+    const int w = settings.width, h = settings.height;
+    sws = sws_getContext(w, h, AV_PIX_FMT_RGBA, w, h, AV_PIX_FMT_YUV420P,
+                         SWS_BILINEAR | SWS_ACCURATE_RND | SWS_FULL_CHR_H_INP, nullptr, nullptr, nullptr);
+    if (!sws) throw RenderError("VideoEncoder '" + path + "': cannot create the colour converter");
+    const int* bt709 = sws_getCoefficients(SWS_CS_ITU709);
+    sws_setColorspaceDetails(sws, bt709, 1, bt709, 0, 0, 1 << 16, 1 << 16);
+  }
+
+  // Step of open(): the file header, with the index (moov atom) to be moved up front at the end
+  // (+faststart), so that the video plays while it downloads.
+  void writeHeader() {
+    AVDictionary* muxOpts = nullptr;
+    av_dict_set(&muxOpts, "movflags", "+faststart", 0);
+    const int ret = avformat_write_header(fmt, &muxOpts);
+    av_dict_free(&muxOpts);
+    if (ret < 0) fail("cannot write the file header", ret);
+    headerWritten = true;
   }
 
   void writeFrame(std::span<const std::uint8_t> rgba, RowOrder order) {

@@ -13,8 +13,8 @@
 
 #include "sim/error.h"
 #include "sim/limits.h"
-#include "sim/mesh_io.h"
-#include "sim/proxy.h"
+#include "mesh/mesh_io.h"
+#include "mesh/proxy.h"
 #include "sim/shapes.h"
 
 namespace springy {
@@ -434,93 +434,106 @@ AttachDesc readAttach(const toml::table& table, const std::string& path, std::si
   return a;
 }
 
-BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t index, Material& material) {
-  Reader r(table, path, "[[body]] #" + std::to_string(index + 1));
-  BodyDesc b;
-  b.source = location(path, table.source()) + ": [[body]] #" + std::to_string(index + 1);
-  b.name = r.string("name", "body " + std::to_string(index + 1));
-  const std::string shape =
-      r.choice("shape", "octahedron_sphere",
-               {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mould", "mesh", "cloth"});
-  // cloth = true: an open surface, simulated as it is (docs/model.md §18); the cloth shape is one.
-  b.cloth = r.boolean("cloth", shape == "cloth");
-  if (shape == "cloth" && !b.cloth) {
-    r.fail(*r.get("cloth"), "cloth", "shape = \"cloth\" is an open surface: it is always cloth = true");
+// Step: a generated shape's mesh, from that shape's own keys (each shape reads only its own; the
+// others are then unknown keys).
+TriMesh makeShape(Reader& r, const std::string& shape) {
+  if (shape == "octahedron_sphere") {
+    return makeOctahedronSphere(r.positive("radius", 1.0), r.integer("subdivisions", 6, 1, 256));
+  } else if (shape == "icosphere") {
+    return makeIcosphere(r.positive("radius", 1.0), r.integer("subdivisions", 3, 0, 8));
+  } else if (shape == "cube") {
+    return makeCube(r.positive("size", 1.0), r.integer("subdivisions", 1, 1, 256));
+  } else if (shape == "tetrahedron") {
+    return makeTetrahedron(r.positive("size", 1.0));
+  } else if (shape == "jelly") {
+    return makeJelly(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("ridges", 8, 0, 64),
+                     r.integer("rings", 10, 2, 200), r.integer("segments", 48, 3, 1000));
+  } else if (shape == "mould") {
+    return makeMould(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("lobes", 8, 0, 64),
+                     r.integer("rings", 12, 2, 200), r.integer("segments", 32, 3, 1000));
   }
-  // Shape parameters: each shape reads only its own keys; the others are then unknown keys.
+  // cloth
+  const std::array<double, 2> size = positivePair(r, "size", {1.0, 1.0});
+  const std::array<int, 2> resolution = integerPair(r, "resolution", {20, 20}, 1, kMaxClothResolution);
+  return makeCloth(size[0], size[1], resolution[0], resolution[1]);
+}
+
+// Step: a mesh file made fit to simulate. A cloth is validated as it is (one piece, every edge
+// in one or two consistently oriented triangles, no zero-area triangle), never wrapped; a mesh
+// that needs it (proxy = "auto": not a closed manifold, badly shaped or far finer than a body
+// needs; proxy = "always") is simulated through a proxy that wraps it (mesh/proxy.h), the file's
+// mesh kept in b.drawMesh to be drawn; any other is validated as a closed body.
+TriMesh loadBodyMesh(const std::string& file, const std::string& proxy, int proxyVertices, BodyDesc& b) {
+  TriMesh mesh = readWeldedMesh(file);
+  std::optional<std::string> reason;
+  if (proxy == "auto" && !b.cloth) reason = needsProxy(mesh, kProxyAutoMaxVertices);
+  if (proxy == "always") reason = "proxy = \"always\"";
+  if (b.cloth) {
+    finishClothMesh(mesh, file);
+  } else if (reason) {
+    ProxyOptions options;
+    options.targetVertices = proxyVertices > 0
+                                 ? static_cast<std::size_t>(proxyVertices)
+                                 : std::clamp<std::size_t>(mesh.positions.size(), 162, kProxyDefaultMaxVertices);
+    const ProxyResult built = buildProxy(mesh, options);
+    b.drawMesh = std::move(mesh);
+    mesh = built.mesh;
+    b.note = "simulated through a proxy (" + *reason + "): " + built.summary;
+  } else {
+    finishClosedMesh(mesh, file);
+  }
+  return mesh;
+}
+
+// Step: shape = "mesh": the file (relative to the scene file), how it is proxied, and the vertex
+// count it is simplified to. Errors of the file are reported at its key.
+TriMesh readMeshShape(Reader& r, const std::string& path, BodyDesc& b) {
+  const toml::node* n = r.get("mesh");
+  if (!n || !n->is_string()) r.failHere("shape = \"mesh\" needs mesh = \"FILE\" (relative to the scene file)");
+  const std::string file = resolvePath(path, n->as_string()->get());
+  const std::string proxy = r.choice("proxy", b.cloth ? "none" : "auto", {"auto", "none", "always"});
+  const int proxyVertices = r.integer("proxy_vertices", 0, 4, kMaxProxyVertices);
+  if (b.cloth && proxy != "none") {
+    r.fail(*r.get("proxy"), "proxy", "cloth = true simulates the mesh as it is, never through a proxy");
+  }
+  if (b.cloth && r.has("proxy_vertices")) {
+    r.fail(*r.get("proxy_vertices"), "proxy_vertices",
+           "cloth = true simulates the mesh as it is, never through a proxy");
+  }
   TriMesh mesh;
   try {
-    if (shape == "octahedron_sphere") {
-      mesh = makeOctahedronSphere(r.positive("radius", 1.0), r.integer("subdivisions", 6, 1, 256));
-    } else if (shape == "icosphere") {
-      mesh = makeIcosphere(r.positive("radius", 1.0), r.integer("subdivisions", 3, 0, 8));
-    } else if (shape == "cube") {
-      mesh = makeCube(r.positive("size", 1.0), r.integer("subdivisions", 1, 1, 256));
-    } else if (shape == "tetrahedron") {
-      mesh = makeTetrahedron(r.positive("size", 1.0));
-    } else if (shape == "jelly") {
-      mesh = makeJelly(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("ridges", 8, 0, 64),
-                       r.integer("rings", 10, 2, 200), r.integer("segments", 48, 3, 1000));
-    } else if (shape == "mould") {
-      mesh = makeMould(r.positive("radius", 8.5), r.positive("height", 10.0), r.integer("lobes", 8, 0, 64),
-                       r.integer("rings", 12, 2, 200), r.integer("segments", 32, 3, 1000));
-    } else if (shape == "cloth") {
-      const std::array<double, 2> size = positivePair(r, "size", {1.0, 1.0});
-      const std::array<int, 2> resolution = integerPair(r, "resolution", {20, 20}, 1, kMaxClothResolution);
-      mesh = makeCloth(size[0], size[1], resolution[0], resolution[1]);
-    } else {
-      const toml::node* n = r.get("mesh");
-      if (!n || !n->is_string()) r.failHere("shape = \"mesh\" needs mesh = \"FILE\" (relative to the scene file)");
-      const std::string file = resolvePath(path, n->as_string()->get());
-      const std::string proxy = r.choice("proxy", b.cloth ? "none" : "auto", {"auto", "none", "always"});
-      const int proxyVertices = r.integer("proxy_vertices", 0, 4, kMaxProxyVertices);
-      if (b.cloth && proxy != "none") {
-        r.fail(*r.get("proxy"), "proxy", "cloth = true simulates the mesh as it is, never through a proxy");
-      }
-      if (b.cloth && r.has("proxy_vertices")) {
-        r.fail(*r.get("proxy_vertices"), "proxy_vertices",
-               "cloth = true simulates the mesh as it is, never through a proxy");
-      }
-      try {
-        mesh = readWeldedMesh(file);
-        // auto: a mesh that is not a closed manifold, or is badly shaped or far finer than a
-        // body needs, is simulated through a proxy that wraps it (sim/proxy.h).
-        std::optional<std::string> reason;
-        if (proxy == "auto" && !b.cloth) reason = needsProxy(mesh, kProxyAutoMaxVertices);
-        if (proxy == "always") reason = "proxy = \"always\"";
-        if (b.cloth) {
-          // The mesh as it is, an open surface: validated (one piece, every edge in one or two
-          // consistently oriented triangles, no zero-area triangle), never wrapped.
-          finishClothMesh(mesh, file);
-        } else if (reason) {
-          ProxyOptions options;
-          options.targetVertices = proxyVertices > 0
-                                       ? static_cast<std::size_t>(proxyVertices)
-                                       : std::clamp<std::size_t>(mesh.positions.size(), 162, kProxyDefaultMaxVertices);
-          const ProxyResult built = buildProxy(mesh, options);
-          b.drawMesh = std::move(mesh);
-          mesh = built.mesh;
-          b.note = "simulated through a proxy (" + *reason + "): " + built.summary;
-        } else {
-          finishClosedMesh(mesh, file);
-        }
-      } catch (const Error& e) {
-        r.fail(*n, "mesh", e.what());
-      }
-      if (const toml::node* s = r.get("simplify")) {
-        const auto* target = s->as_integer();
-        if (!target || target->get() < 4) r.fail(*s, "simplify", "must be a vertex count of at least 4");
-        if (b.cloth) {
-          r.fail(*s, "simplify",
-                 "simplifies closed meshes only; with cloth = true, give the mesh at the resolution to simulate");
-        }
-        mesh = simplifyMesh(mesh, static_cast<std::size_t>(target->get()));
-      }
+    mesh = loadBodyMesh(file, proxy, proxyVertices, b);
+  } catch (const Error& e) {
+    r.fail(*n, "mesh", e.what());
+  }
+  if (const toml::node* s = r.get("simplify")) {
+    const auto* target = s->as_integer();
+    if (!target || target->get() < 4) r.fail(*s, "simplify", "must be a vertex count of at least 4");
+    if (b.cloth) {
+      r.fail(*s, "simplify",
+             "simplifies closed meshes only; with cloth = true, give the mesh at the resolution to simulate");
     }
+    mesh = simplifyMesh(mesh, static_cast<std::size_t>(target->get()));
+  }
+  return mesh;
+}
+
+// Step: the body's mesh, generated or read. An error that does not already name the scene file
+// (from a shape's generator or the mesh reader) is reported at the body's table.
+TriMesh readShape(Reader& r, const std::string& shape, const std::string& path, BodyDesc& b) {
+  TriMesh mesh;
+  try {
+    mesh = shape == "mesh" ? readMeshShape(r, path, b) : makeShape(r, shape);
   } catch (const Error& e) {
     if (std::string(e.what()).rfind(path, 0) == 0) throw;
     r.failHere(e.what());
   }
+  return mesh;
+}
+
+// Step: the mesh placed in the scene (scale, rotation, position), and the drawn mesh of a proxy
+// with it, bound to the proxy's surface.
+void placeMesh(Reader& r, TriMesh mesh, BodyDesc& b) {
   const Transform transform = readTransform(r);
   for (Vec3& p : mesh.positions) p = transform.apply(p);
   b.mesh = std::move(mesh);
@@ -528,6 +541,11 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
     for (Vec3& p : b.drawMesh.positions) p = transform.apply(p);
     b.drawBinding = bindToSurface(b.mesh, b.drawMesh.positions);
   }
+}
+
+// Step: the initial motion, the spring model and the mass and how it is spread. all_pairs is
+// refused on a mesh whose struts (one per pair of vertices) would be too many.
+void readModelAndMass(Reader& r, BodyDesc& b) {
   b.velocity = r.vec3("velocity", {});
   b.angularVelocity = r.vec3("angular_velocity", {});
   b.model = r.choice("model", "springy", {"springy", "all_pairs"}) == "all_pairs" ? SpringModel::AllPairs
@@ -544,8 +562,13 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   // Ranges that keep every derived constant finite and positive (a period of 1e-300 s or a mass
   // of 1e-300 kg overflows the stiffness or underflows the frequency).
   b.mass = r.inRange("mass", b.mass, kMinMass, kMaxMass);
-  // Material: the body's own (resolution independent, the default) or the seed's per element (docs/model.md §5),
-  // which any element key selects (the showcase scenes' values keep their meaning).
+}
+
+// Step: which material the body has, the body's own (resolution independent, the default) or
+// the seed's per element (docs/model.md §5), which any element key selects (the showcase scenes'
+// values keep their meaning); a key of the other material is refused. Reads the body material's
+// periods.
+void readMaterialModel(Reader& r, BodyDesc& b) {
   static const char* const elementKeys[] = {"strut_period",    "strut_decay",   "hinge_period",    "hinge_decay",
                                             "strut_stiffness", "strut_damping", "hinge_stiffness", "hinge_damping"};
   static const char* const bodyKeys[] = {"stretch_period", "bend_period", "deformation_decay"};
@@ -581,6 +604,11 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
       }
     }
   }
+}
+
+// Step: the element material's periods and decay times (or constants given outright), and the
+// gas's period.
+void readElementMaterial(Reader& r, BodyDesc& b) {
   b.strutDecay = r.inRange("strut_decay", b.strutDecay, kMinTime, kMaxTime);
   b.strutPeriod = r.inRange("strut_period", b.strutPeriod, kMinTime, kMaxTime);
   b.hingeDecay = r.number("hinge_decay", b.hingeDecay);
@@ -592,92 +620,111 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   b.strutDamping = r.optionalInRange("strut_damping", 0.0, kMaxConstant);
   b.hingeStiffness = r.optionalInRange("hinge_stiffness", 0.0, kMaxConstant);
   b.hingeDamping = r.optionalInRange("hinge_damping", 0.0, kMaxConstant);
-  // Contact with other bodies and within the body (sim/contact.h).
+}
+
+// Step: contact with other bodies and within the body (sim/contact.h).
+void readBodyContact(Reader& r, BodyDesc& b) {
   b.contact = r.boolean("contact", b.contact);
   b.selfContact = r.boolean("self_contact", b.selfContact);
   b.contactThickness = r.optionalInRange("contact_thickness", 1e-9, 1e3).value_or(0.0);
   b.contactFriction = r.inRange("contact_friction", b.contactFriction, 0.0, 10.0);
   b.contactRestitution = r.inRange("contact_restitution", b.contactRestitution, 0.0, 1.0);
-  // Pins: vertex indices or rules ("top", "bottom", "left", "right", "front", "back": the
-  // extreme vertex along y, x or z; "all": every vertex), pin_side (every vertex on a side of
-  // the bounding box) and pin_near = [[x, y, z], ...]: the nearest vertex.
-  // Each rule's vertex is found once however often it is named (a scan of every vertex per pin
-  // made 16 KB of rules take seconds on a fine sphere: found by the fuzzer).
+}
+
+// Step: pin = [...]: vertex indices or rules ("top", "bottom", "left", "right", "front", "back":
+// the extreme vertex along y, x or z; "all": every vertex). Each rule's vertex is found once
+// however often it is named (a scan of every vertex per pin made 16 KB of rules take seconds on
+// a fine sphere: found by the fuzzer).
+void readPinList(Reader& r, BodyDesc& b) {
+  const toml::node* n = r.get("pin");
+  if (!n) return;
   std::array<std::optional<uint32_t>, 6> ruleVertex;
   bool pinnedAll = false;
-  if (const toml::node* n = r.get("pin")) {
-    const auto* a = n->as_array();
-    if (!a) r.fail(*n, "pin", "must be an array of vertex indices or rules, e.g. [\"top\"] or [0, 5]");
-    for (const toml::node& item : *a) {
-      if (const auto* i = item.as_integer()) {
-        if (i->get() < 0 || static_cast<std::size_t>(i->get()) >= b.mesh.positions.size()) {
-          r.fail(item, "pin",
-                 "vertex " + std::to_string(i->get()) + " does not exist (the body has " +
-                     std::to_string(b.mesh.positions.size()) + " vertices)");
-        }
-        b.pinned.push_back(static_cast<uint32_t>(i->get()));
-      } else if (const auto* s = item.as_string()) {
-        if (s->get() == "all") {  // every vertex: a static body that still takes part in contact
-          if (!pinnedAll) {
-            for (uint32_t v = 0; v < b.mesh.positions.size(); ++v) b.pinned.push_back(v);
-          }
-          pinnedAll = true;
-          continue;
-        }
-        const SideRule* rule = findSideRule(s->get());
-        if (!rule) r.fail(item, "pin", "unknown rule '" + s->get() + "' (" + kSideRuleNames + ", all)");
-        std::optional<uint32_t>& v = ruleVertex[static_cast<std::size_t>(rule - kSideRules)];
-        if (!v) v = extremeVertex(b.mesh, rule->axis, rule->highest);
-        b.pinned.push_back(*v);
-      } else {
-        r.fail(item, "pin", "entries must be vertex indices or rule names");
+  const auto* a = n->as_array();
+  if (!a) r.fail(*n, "pin", "must be an array of vertex indices or rules, e.g. [\"top\"] or [0, 5]");
+  for (const toml::node& item : *a) {
+    if (const auto* i = item.as_integer()) {
+      if (i->get() < 0 || static_cast<std::size_t>(i->get()) >= b.mesh.positions.size()) {
+        r.fail(item, "pin",
+               "vertex " + std::to_string(i->get()) + " does not exist (the body has " +
+                   std::to_string(b.mesh.positions.size()) + " vertices)");
       }
-    }
-  }
-  // pin_side = "left" or ["left", "top", ...]: every vertex on that side of the body's bounding
-  // box (within 1e-6 of its diagonal), e.g. the whole edge of a flag along its pole. Each side
-  // once however often it is named.
-  if (const toml::node* n = r.get("pin_side")) {
-    const auto* a = n->as_array();
-    if (!a && !n->is_string())
-      r.fail(*n, "pin_side", "must be a side or an array of sides, e.g. \"left\" or [\"left\", \"top\"]");
-    std::array<bool, std::size(kSideRules)> named{};
-    auto name = [&](const toml::node& item) {
-      const auto* s = item.as_string();
-      if (!s) r.fail(item, "pin_side", std::string("entries must be sides (") + kSideRuleNames + ")");
+      b.pinned.push_back(static_cast<uint32_t>(i->get()));
+    } else if (const auto* s = item.as_string()) {
+      if (s->get() == "all") {  // every vertex: a static body that still takes part in contact
+        if (!pinnedAll) {
+          for (uint32_t v = 0; v < b.mesh.positions.size(); ++v) b.pinned.push_back(v);
+        }
+        pinnedAll = true;
+        continue;
+      }
       const SideRule* rule = findSideRule(s->get());
-      if (!rule) r.fail(item, "pin_side", "unknown side '" + s->get() + "' (" + kSideRuleNames + ")");
-      named[static_cast<std::size_t>(rule - kSideRules)] = true;
-    };
-    if (a) {
-      for (const toml::node& item : *a) name(item);
+      if (!rule) r.fail(item, "pin", "unknown rule '" + s->get() + "' (" + kSideRuleNames + ", all)");
+      std::optional<uint32_t>& v = ruleVertex[static_cast<std::size_t>(rule - kSideRules)];
+      if (!v) v = extremeVertex(b.mesh, rule->axis, rule->highest);
+      b.pinned.push_back(*v);
     } else {
-      name(*n);
-    }
-    const std::vector<Vec3>& x = b.mesh.positions;
-    const double tolerance = 1e-6 * length(boundsOf(x).size());
-    for (std::size_t k = 0; k < named.size(); ++k) {
-      if (!named[k]) continue;
-      const SideRule& rule = kSideRules[k];
-      const double extreme = x[extremeVertex(b.mesh, rule.axis, rule.highest)][rule.axis];
-      for (uint32_t i = 0; i < x.size(); ++i) {
-        if (std::fabs(x[i][rule.axis] - extreme) <= tolerance) b.pinned.push_back(i);
-      }
+      r.fail(item, "pin", "entries must be vertex indices or rule names");
     }
   }
-  if (const toml::node* n = r.get("pin_near")) {
-    const auto* a = n->as_array();
-    if (!a) r.fail(*n, "pin_near", "must be an array of points [[x, y, z], ...]");
-    // A point as far from every vertex as the centre of a sphere has all of them at nearly one
-    // distance, and any exact search examines them all: the count of points is what bounds it.
-    if (a->size() > kMaxPinNear) {
-      r.fail(*n, "pin_near",
-             std::to_string(a->size()) + " points, more than the limit of " + std::to_string(kMaxPinNear) +
-                 " (pin vertex indices instead)");
-    }
-    const NearestVertex nearest(b.mesh.positions);
-    for (const toml::node& item : *a) b.pinned.push_back(nearest(r.asVec3(item, "pin_near")));
+}
+
+// One entry of pin_side: marks its side as named.
+void nameSide(Reader& r, const toml::node& item, std::array<bool, std::size(kSideRules)>& named) {
+  const auto* s = item.as_string();
+  if (!s) r.fail(item, "pin_side", std::string("entries must be sides (") + kSideRuleNames + ")");
+  const SideRule* rule = findSideRule(s->get());
+  if (!rule) r.fail(item, "pin_side", "unknown side '" + s->get() + "' (" + kSideRuleNames + ")");
+  named[static_cast<std::size_t>(rule - kSideRules)] = true;
+}
+
+// Step: pin_side = "left" or ["left", "top", ...]: every vertex on that side of the body's
+// bounding box (within 1e-6 of its diagonal), e.g. the whole edge of a flag along its pole. Each
+// side once however often it is named.
+void readPinSides(Reader& r, BodyDesc& b) {
+  const toml::node* n = r.get("pin_side");
+  if (!n) return;
+  const auto* a = n->as_array();
+  if (!a && !n->is_string())
+    r.fail(*n, "pin_side", "must be a side or an array of sides, e.g. \"left\" or [\"left\", \"top\"]");
+  std::array<bool, std::size(kSideRules)> named{};
+  if (a) {
+    for (const toml::node& item : *a) nameSide(r, item, named);
+  } else {
+    nameSide(r, *n, named);
   }
+  const std::vector<Vec3>& x = b.mesh.positions;
+  const double tolerance = 1e-6 * length(boundsOf(x).size());
+  for (std::size_t k = 0; k < named.size(); ++k) {
+    if (!named[k]) continue;
+    const SideRule& rule = kSideRules[k];
+    const double extreme = x[extremeVertex(b.mesh, rule.axis, rule.highest)][rule.axis];
+    for (uint32_t i = 0; i < x.size(); ++i) {
+      if (std::fabs(x[i][rule.axis] - extreme) <= tolerance) b.pinned.push_back(i);
+    }
+  }
+}
+
+// Step: pin_near = [[x, y, z], ...]: the vertex nearest each point.
+void readPinNear(Reader& r, BodyDesc& b) {
+  const toml::node* n = r.get("pin_near");
+  if (!n) return;
+  const auto* a = n->as_array();
+  if (!a) r.fail(*n, "pin_near", "must be an array of points [[x, y, z], ...]");
+  // A point as far from every vertex as the centre of a sphere has all of them at nearly one
+  // distance, and any exact search examines them all: the count of points is what bounds it.
+  if (a->size() > kMaxPinNear) {
+    r.fail(*n, "pin_near",
+           std::to_string(a->size()) + " points, more than the limit of " + std::to_string(kMaxPinNear) +
+               " (pin vertex indices instead)");
+  }
+  const NearestVertex nearest(b.mesh.positions);
+  for (const toml::node& item : *a) b.pinned.push_back(nearest(r.asVec3(item, "pin_near")));
+}
+
+// Step: how the pinned vertices move (pin_motion) and when they are let go (pin_release); either
+// needs pinned vertices.
+void readPinMotion(Reader& r, const std::string& path, std::size_t index, BodyDesc& b) {
   if (const toml::table* t = r.subtable("pin_motion")) {
     b.pinMotion = readMotion(*t, path, "[[body]] #" + std::to_string(index + 1) + " pin_motion");
   }
@@ -685,6 +732,33 @@ BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t
   if ((b.pinMotion.moves() || std::isfinite(b.pinRelease)) && b.pinned.empty()) {
     r.failHere("pin_motion and pin_release move or free the pinned vertices: pin some (pin, pin_side, pin_near)");
   }
+}
+
+// [[body]]: its shape and placement, spring model, mass, material, contact and pins, in that
+// order (the order in which a key's error is reported), and how it is drawn (`material`).
+BodyDesc readBody(const toml::table& table, const std::string& path, std::size_t index, Material& material) {
+  Reader r(table, path, "[[body]] #" + std::to_string(index + 1));
+  BodyDesc b;
+  b.source = location(path, table.source()) + ": [[body]] #" + std::to_string(index + 1);
+  b.name = r.string("name", "body " + std::to_string(index + 1));
+  const std::string shape =
+      r.choice("shape", "octahedron_sphere",
+               {"octahedron_sphere", "icosphere", "cube", "tetrahedron", "jelly", "mould", "mesh", "cloth"});
+  // cloth = true: an open surface, simulated as it is (docs/model.md §18); the cloth shape is one.
+  b.cloth = r.boolean("cloth", shape == "cloth");
+  if (shape == "cloth" && !b.cloth) {
+    r.fail(*r.get("cloth"), "cloth", "shape = \"cloth\" is an open surface: it is always cloth = true");
+  }
+  placeMesh(r, readShape(r, shape, path, b), b);
+  readModelAndMass(r, b);
+  readMaterialModel(r, b);
+  readElementMaterial(r, b);
+  readBodyContact(r, b);
+  // Pins: pin (indices and rules), pin_side (every vertex on a side), pin_near (the nearest vertex).
+  readPinList(r, b);
+  readPinSides(r, b);
+  readPinNear(r, b);
+  readPinMotion(r, path, index, b);
   material = readMaterial(r, Material{{0.75, 0.2, 0.2}, 1.0, 48.0});
   r.finish();
   return b;
@@ -748,105 +822,189 @@ TriangleCollider readTriangleCollider(const toml::table& table, const std::strin
   return c;
 }
 
-}  // namespace
-
-SceneDesc parseScene(const std::string& text, const std::string& path) {
-  toml::table root;
+// Step: the TOML text parsed, its syntax errors reported at file:line:column.
+toml::table parseToml(const std::string& text, const std::string& path) {
   try {
-    root = toml::parse(text, path);
+    return toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     throw Error(location(path, e.source()) + ": " + std::string(e.description()));
   }
+}
+
+// Step: [scene]: the run's name, duration, step, integrator and its settings.
+void readRunSettings(const toml::table& table, const std::string& path, SceneDesc& scene) {
+  Reader r(table, path, "[scene]");
+  scene.name = r.string("name", scene.name);
+  scene.duration = r.positive("duration", scene.duration);
+  scene.stepGiven = r.has("dt") || r.has("substeps");
+  scene.dt = r.positive("dt", scene.dt);
+  scene.substeps = r.integer("substeps", 1, 1, kMaxSubsteps);
+  if (const toml::node* n = r.get("integrator")) {
+    if (!n->is_string() || !parseIntegrator(n->as_string()->get(), scene.integrator)) {
+      r.fail(*n, "integrator", "must be one of: " + integratorNames());
+    }
+  }
+  if (r.has("tolerance")) {
+    scene.tolerance = r.inRange("tolerance", scene.tolerance, 1e-12, 0.5);
+    if (!isAdaptive(scene.integrator)) scene.integrator = kDefaultAdaptive;  // a tolerance asks for one
+  }
+  scene.iterations = r.integer("iterations", scene.iterations, 1, kMaxIterations);
+  if (const toml::node* n = r.get("iterations"); n != nullptr && !integratorTraits(scene.integrator).takesIterations) {
+    // Only vbd sweeps; any other integrator would ignore the key without a word.
+    r.fail(*n, "iterations", "sets vbd's sweeps a step, but the integrator is " +
+                                 std::string(integratorName(scene.integrator)) + " (set integrator = \"vbd\" or remove the key)");
+  }
+  scene.restingSpeed = r.number("resting_speed", scene.restingSpeed);
+  r.finish();
+}
+
+// Step: [environment.wind]: the air's velocity, its gusts and its pressure on faces.
+Wind readWind(const toml::table& table, const std::string& path) {
+  Reader wr(table, path, "[environment.wind]");
+  Wind wind;
+  wind.velocity = wr.vec3("velocity", {});
+  wind.gustStrength = wr.inRange("gust_strength", 0.0, 0.0, 10.0);
+  wind.gustPeriod = wr.positive("gust_period", 2.0);
+  wind.pressure = wr.inRange("pressure", 0.0, 0.0, 1e6);
+  wind.seed = static_cast<uint64_t>(wr.integer("seed", 1, 0, 2147483647));
+  wr.finish();
+  return wind;
+}
+
+// Step: [environment]: gravity, drag and the wind.
+void readEnvironment(const toml::table& table, const std::string& path, SceneDesc& scene) {
+  Reader r(table, path, "[environment]");
+  scene.gravity = r.vec3("gravity", scene.gravity);
+  scene.drag = r.inRange("drag", 0.0, 0.0, 1e6);
+  if (const toml::table* w = r.subtable("wind")) scene.wind = readWind(*w, path);
+  r.finish();
+}
+
+// Step: every [[body]], with its look. The vertices are counted body by body, so that memory
+// stops growing at the body that crosses the limit.
+void readBodies(const toml::array& bodies, const std::string& path, SceneDesc& scene) {
+  std::uint64_t vertices = 0;
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    Material material;
+    scene.bodies.push_back(readBody(*bodies.get(i)->as_table(), path, i, material));
+    scene.view.bodies.push_back(material);
+    vertices += scene.bodies.back().mesh.positions.size();
+    if (vertices > kMaxSceneVertices) {
+      throw Error(scene.bodies.back().source + ": the bodies up to this one have " + std::to_string(vertices) +
+                  " vertices in all, more than the limit of " + std::to_string(kMaxSceneVertices));
+    }
+  }
+}
+
+// Step: one [[plane]]: a collider (point, normal, contact, soft ground, motion) and its look.
+void readPlane(const toml::table& table, const std::string& path, std::size_t index, SceneDesc& scene) {
+  Reader r(table, path, "[[plane]] #" + std::to_string(index + 1));
+  PlaneCollider p;
+  SurfaceLook look;
+  p.point = r.vec3("point", {});
+  const toml::node* nn = r.get("normal");
+  const Vec3 normal = nn ? r.asVec3(*nn, "normal") : Vec3{0, 1, 0};
+  if (!(length(normal) > 0.0)) r.fail(*nn, "normal", "must not be zero");
+  p.normal = normalized(normal);
+  p.material = readContact(r);
+  p.damping = r.inRange("damping", 0.0, 0.0, 1e6);
+  p.layer = r.inRange("damping_layer", 0.0, 0.0, 1e6);
+  if ((p.damping > 0.0) != (p.layer > 0.0)) {
+    r.failHere("soft ground needs both damping (the rate, 1/s) and damping_layer (the thickness, m) positive");
+  }
+  if (const toml::table* t = r.subtable("motion")) {
+    p.motion = readMotion(*t, path, "[[plane]] #" + std::to_string(index + 1) + " motion");
+    if (p.layer > 0.0) r.failHere("soft ground (damping, damping_layer) does not move: give it no motion");
+  }
+  look.material = readMaterial(r, Material{{0.575, 0.54, 0.54}, 1.0, 8.0});
+  look.visible = r.boolean("visible", true);
+  look.extent = r.positive("extent", look.extent);
+  r.finish();
+  scene.planes.push_back(p);
+  scene.view.planes.push_back(look);
+}
+
+// Step: one [[prop]]: a cylinder or a box that is drawn only (it takes no part in the simulation).
+PropDesc readProp(const toml::table& table, const std::string& path, std::size_t index) {
+  Reader r(table, path, "[[prop]] #" + std::to_string(index + 1));
+  PropDesc p;
+  if (r.choice("shape", "cylinder", {"cylinder", "box"}) == "box") {
+    p.shape = PropDesc::Shape::Box;
+    p.center = r.vec3("center", {});
+    p.size = r.vec3("size", {1, 1, 1});
+  } else {
+    p.from = r.vec3("from", {});
+    p.to = r.vec3("to", {0, 1, 0});
+    p.radius = r.positive("radius", p.radius);
+  }
+  p.material = readMaterial(r, Material{{0.45, 0.3, 0.2}, 1.0, 16.0});
+  if (const toml::table* t = r.subtable("motion")) {
+    p.motion = readMotion(*t, path, "[[prop]] #" + std::to_string(index + 1) + " motion");
+  }
+  r.finish();
+  return p;
+}
+
+// Step: [render.camera]: where the camera stands and looks (a target or angles, not both).
+void readCamera(const toml::table& table, const std::string& path, CameraDesc& camera) {
+  Reader cr(table, path, "[render.camera]");
+  camera.position = cr.optionalVec3("position");
+  camera.target = cr.optionalVec3("target");
+  camera.angles = cr.optionalVec3("angles");
+  if (camera.target && camera.angles) cr.failHere("give either target or angles, not both");
+  camera.fov = cr.inRange("fov", camera.fov, 1.0, 170.0);
+  cr.finish();
+}
+
+// Step: [render.light]: the light's direction, colour and ambient share.
+void readLight(const toml::table& table, const std::string& path, RenderDesc& rd) {
+  Reader lr(table, path, "[render.light]");
+  rd.light.angles = lr.vec3("angles", rd.light.angles);
+  rd.light.color = lr.color("color", rd.light.color);
+  rd.light.ambient = lr.inRange("ambient", rd.light.ambient, 0.0, 1.0);
+  lr.finish();
+}
+
+// Step: [render]: the video's size, rate and quality, the picture's options, camera and light.
+void readRender(const toml::table& table, const std::string& path, RenderDesc& rd) {
+  Reader r(table, path, "[render]");
+  rd.width = r.integer("width", rd.width, 16, 7680);
+  rd.height = r.integer("height", rd.height, 16, 4320);
+  if (rd.width % 2 || rd.height % 2) r.failHere("width and height must be even (the video is yuv420p)");
+  rd.fps = r.inRange("fps", rd.fps, 1.0, 240.0);
+  rd.crf = r.integer("crf", rd.crf, 0, 51);
+  rd.preset =
+      r.choice("preset", rd.preset,
+               {"ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow"});
+  rd.shadows = r.boolean("shadows", rd.shadows);
+  rd.antialias = r.boolean("antialias", rd.antialias);
+  rd.overlay = r.boolean("overlay", rd.overlay);
+  rd.shadowMapSize = r.integer("shadow_map_size", rd.shadowMapSize, 256, 8192);
+  rd.skyTop = r.color("sky_top", rd.skyTop);
+  rd.skyBottom = r.color("sky_bottom", rd.skyBottom);
+  if (const toml::table* c = r.subtable("camera")) readCamera(*c, path, rd.camera);
+  if (const toml::table* l = r.subtable("light")) readLight(*l, path, rd);
+  r.finish();
+}
+
+}  // namespace
+
+SceneDesc parseScene(const std::string& text, const std::string& path) {
+  const toml::table root = parseToml(text, path);
   SceneDesc scene;
   scene.path = path;
   Reader top(root, path, "the scene");
   scene.name = std::filesystem::path(path).stem().string();
 
-  if (const toml::table* t = top.subtable("scene")) {
-    Reader r(*t, path, "[scene]");
-    scene.name = r.string("name", scene.name);
-    scene.duration = r.positive("duration", scene.duration);
-    scene.stepGiven = r.has("dt") || r.has("substeps");
-    scene.dt = r.positive("dt", scene.dt);
-    scene.substeps = r.integer("substeps", 1, 1, kMaxSubsteps);
-    if (const toml::node* n = r.get("integrator")) {
-      if (!n->is_string() || !parseIntegrator(n->as_string()->get(), scene.integrator)) {
-        r.fail(*n, "integrator", "must be one of: " + integratorNames());
-      }
-    }
-    if (r.has("tolerance")) {
-      scene.tolerance = r.inRange("tolerance", scene.tolerance, 1e-12, 0.5);
-      if (!isAdaptive(scene.integrator)) scene.integrator = kDefaultAdaptive;  // a tolerance asks for one
-    }
-    scene.iterations = r.integer("iterations", scene.iterations, 1, kMaxIterations);
-    if (const toml::node* n = r.get("iterations"); n != nullptr && !integratorTraits(scene.integrator).takesIterations) {
-      // Only vbd sweeps; any other integrator would ignore the key without a word.
-      r.fail(*n, "iterations", "sets vbd's sweeps a step, but the integrator is " +
-                                   std::string(integratorName(scene.integrator)) + " (set integrator = \"vbd\" or remove the key)");
-    }
-    scene.restingSpeed = r.number("resting_speed", scene.restingSpeed);
-    r.finish();
-  }
-  if (const toml::table* t = top.subtable("environment")) {
-    Reader r(*t, path, "[environment]");
-    scene.gravity = r.vec3("gravity", scene.gravity);
-    scene.drag = r.inRange("drag", 0.0, 0.0, 1e6);
-    if (const toml::table* w = r.subtable("wind")) {
-      Reader wr(*w, path, "[environment.wind]");
-      Wind wind;
-      wind.velocity = wr.vec3("velocity", {});
-      wind.gustStrength = wr.inRange("gust_strength", 0.0, 0.0, 10.0);
-      wind.gustPeriod = wr.positive("gust_period", 2.0);
-      wind.pressure = wr.inRange("pressure", 0.0, 0.0, 1e6);
-      wind.seed = static_cast<uint64_t>(wr.integer("seed", 1, 0, 2147483647));
-      wr.finish();
-      scene.wind = wind;
-    }
-    r.finish();
-  }
+  if (const toml::table* t = top.subtable("scene")) readRunSettings(*t, path, scene);
+  if (const toml::table* t = top.subtable("environment")) readEnvironment(*t, path, scene);
   if (const toml::array* bodies = arrayOfTables(root, "body", path)) {
     top.get("body");
-    std::uint64_t vertices = 0;
-    for (std::size_t i = 0; i < bodies->size(); ++i) {
-      Material material;
-      scene.bodies.push_back(readBody(*bodies->get(i)->as_table(), path, i, material));
-      scene.view.bodies.push_back(material);
-      // Checked body by body, so that memory stops growing at the body that crosses the limit.
-      vertices += scene.bodies.back().mesh.positions.size();
-      if (vertices > kMaxSceneVertices) {
-        throw Error(scene.bodies.back().source + ": the bodies up to this one have " + std::to_string(vertices) +
-                    " vertices in all, more than the limit of " + std::to_string(kMaxSceneVertices));
-      }
-    }
+    readBodies(*bodies, path, scene);
   }
   if (const toml::array* planes = arrayOfTables(root, "plane", path)) {
     top.get("plane");
-    for (std::size_t i = 0; i < planes->size(); ++i) {
-      Reader r(*planes->get(i)->as_table(), path, "[[plane]] #" + std::to_string(i + 1));
-      PlaneCollider p;
-      SurfaceLook look;
-      p.point = r.vec3("point", {});
-      const toml::node* nn = r.get("normal");
-      const Vec3 normal = nn ? r.asVec3(*nn, "normal") : Vec3{0, 1, 0};
-      if (!(length(normal) > 0.0)) r.fail(*nn, "normal", "must not be zero");
-      p.normal = normalized(normal);
-      p.material = readContact(r);
-      p.damping = r.inRange("damping", 0.0, 0.0, 1e6);
-      p.layer = r.inRange("damping_layer", 0.0, 0.0, 1e6);
-      if ((p.damping > 0.0) != (p.layer > 0.0)) {
-        r.failHere("soft ground needs both damping (the rate, 1/s) and damping_layer (the thickness, m) positive");
-      }
-      if (const toml::table* t = r.subtable("motion")) {
-        p.motion = readMotion(*t, path, "[[plane]] #" + std::to_string(i + 1) + " motion");
-        if (p.layer > 0.0) r.failHere("soft ground (damping, damping_layer) does not move: give it no motion");
-      }
-      look.material = readMaterial(r, Material{{0.575, 0.54, 0.54}, 1.0, 8.0});
-      look.visible = r.boolean("visible", true);
-      look.extent = r.positive("extent", look.extent);
-      r.finish();
-      scene.planes.push_back(p);
-      scene.view.planes.push_back(look);
-    }
+    for (std::size_t i = 0; i < planes->size(); ++i) readPlane(*planes->get(i)->as_table(), path, i, scene);
   }
   if (const toml::array* tris = arrayOfTables(root, "triangles", path)) {
     top.get("triangles");
@@ -865,60 +1023,10 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
   if (const toml::array* props = arrayOfTables(root, "prop", path)) {
     top.get("prop");
     for (std::size_t i = 0; i < props->size(); ++i) {
-      Reader r(*props->get(i)->as_table(), path, "[[prop]] #" + std::to_string(i + 1));
-      PropDesc p;
-      if (r.choice("shape", "cylinder", {"cylinder", "box"}) == "box") {
-        p.shape = PropDesc::Shape::Box;
-        p.center = r.vec3("center", {});
-        p.size = r.vec3("size", {1, 1, 1});
-      } else {
-        p.from = r.vec3("from", {});
-        p.to = r.vec3("to", {0, 1, 0});
-        p.radius = r.positive("radius", p.radius);
-      }
-      p.material = readMaterial(r, Material{{0.45, 0.3, 0.2}, 1.0, 16.0});
-      if (const toml::table* t = r.subtable("motion")) {
-        p.motion = readMotion(*t, path, "[[prop]] #" + std::to_string(i + 1) + " motion");
-      }
-      r.finish();
-      scene.view.props.push_back(p);
+      scene.view.props.push_back(readProp(*props->get(i)->as_table(), path, i));
     }
   }
-  if (const toml::table* t = top.subtable("render")) {
-    Reader r(*t, path, "[render]");
-    RenderDesc& rd = scene.view.render;
-    rd.width = r.integer("width", rd.width, 16, 7680);
-    rd.height = r.integer("height", rd.height, 16, 4320);
-    if (rd.width % 2 || rd.height % 2) r.failHere("width and height must be even (the video is yuv420p)");
-    rd.fps = r.inRange("fps", rd.fps, 1.0, 240.0);
-    rd.crf = r.integer("crf", rd.crf, 0, 51);
-    rd.preset =
-        r.choice("preset", rd.preset,
-                 {"ultrafast", "superfast", "veryfast", "faster", "fast", "medium", "slow", "slower", "veryslow"});
-    rd.shadows = r.boolean("shadows", rd.shadows);
-    rd.antialias = r.boolean("antialias", rd.antialias);
-    rd.overlay = r.boolean("overlay", rd.overlay);
-    rd.shadowMapSize = r.integer("shadow_map_size", rd.shadowMapSize, 256, 8192);
-    rd.skyTop = r.color("sky_top", rd.skyTop);
-    rd.skyBottom = r.color("sky_bottom", rd.skyBottom);
-    if (const toml::table* c = r.subtable("camera")) {
-      Reader cr(*c, path, "[render.camera]");
-      rd.camera.position = cr.optionalVec3("position");
-      rd.camera.target = cr.optionalVec3("target");
-      rd.camera.angles = cr.optionalVec3("angles");
-      if (rd.camera.target && rd.camera.angles) cr.failHere("give either target or angles, not both");
-      rd.camera.fov = cr.inRange("fov", rd.camera.fov, 1.0, 170.0);
-      cr.finish();
-    }
-    if (const toml::table* l = r.subtable("light")) {
-      Reader lr(*l, path, "[render.light]");
-      rd.light.angles = lr.vec3("angles", rd.light.angles);
-      rd.light.color = lr.color("color", rd.light.color);
-      rd.light.ambient = lr.inRange("ambient", rd.light.ambient, 0.0, 1.0);
-      lr.finish();
-    }
-    r.finish();
-  }
+  if (const toml::table* t = top.subtable("render")) readRender(*t, path, scene.view.render);
   top.finish();
   if (scene.bodies.empty()) throw Error(path + ": the scene has no [[body]]");
   if (auto problem = runSettingsProblem(scene)) {

@@ -132,6 +132,145 @@ StabilityCase fromBody(const std::string& name, const std::string& description, 
   return c;
 }
 
+// The cases of stabilityCases(), one function each.
+
+StabilityCase stiffStrut() {
+  StabilityCase c = strutCase(0.001, 0.1);
+  c.name = "stiff strut";
+  c.description = "two masses, one strut, P = 1 ms, T = 0.1 s";
+  return c;
+}
+
+StabilityCase stiffHinge() {
+  StabilityCase c = hingeCase(0.001, 0.1);
+  c.name = "stiff hinge";
+  c.description = "two triangles, one hinge, P_theta = 1 ms, T_theta = 0.1 s, released bent";
+  return c;
+}
+
+StabilityCase stiffBall() {
+  StabilityCase c = fromBody("stiff ball", "icosphere, P = P_theta = 1 ms, released squashed to 0.7",
+                             ball(0.001, 0.1, 0.001, 0.1));
+  for (Vec3& p : c.positions) p.y *= 0.7;
+  return c;
+}
+
+// The gas is the stiff term, and it stiffens as the volume falls (p V = const).
+StabilityCase stiffGas() {
+  BodyDesc desc = ball(0.05, 0.1, 0.0, 0.0);
+  desc.volumePeriod = 0.0002;
+  StabilityCase c = fromBody("stiff gas", "icosphere, P = 50 ms, no hinges, gas P_V = 0.2 ms, released squashed to 0.7",
+                             desc);
+  for (Vec3& p : c.positions) p.y *= 0.7;
+  return c;
+}
+
+StabilityCase overdamped() {
+  StabilityCase c = fromBody("overdamped", "icosphere, P = 50 ms, T = 0.1 ms (T << P: damping is the stiff term)",
+                             ball(0.05, 1e-4, 0.5, 2.0));
+  for (Vec3& p : c.positions) p.y *= 0.7;
+  return c;
+}
+
+StabilityCase undamped() {
+  StabilityCase c = fromBody("undamped", "icosphere, P = 50 ms, P_theta = 0.5 s, no damping at all",
+                             ball(0.05, 0.0, 0.5, 0.0));
+  for (Vec3& p : c.positions) p.y *= 0.7;
+  return c;
+}
+
+// Tiny triangles beside large ones: a cube whose corner vertices are pulled almost onto their
+// neighbours would do it geometrically; the masses are what matter for stability, so every other
+// vertex of the ball gets 1e-4 of its mass (springs keep their constants).
+StabilityCase massRatio() {
+  StabilityCase c = fromBody("mass ratio 1:1e4", "icosphere, P = 50 ms, every other vertex 1e-4 times lighter",
+                             ball(0.05, 0.03, 0.5, 2.0));
+  for (std::size_t i = 0; i < c.model.mass.size(); i += 2) {
+    c.model.mass[i] *= 1e-4;
+    c.model.invMass[i] = 1.0 / c.model.mass[i];
+  }
+  for (Vec3& p : c.positions) p.y *= 0.9;
+  return c;
+}
+
+// A tetrahedron whose apex is pushed down to 1 % of its height: four sliver faces.
+StabilityCase sliver() {
+  BodyDesc desc = ball(0.05, 0.03, 0.5, 2.0);
+  desc.name = "sliver";
+  desc.mesh = makeTetrahedron(1.0);
+  const Vec3 base = (desc.mesh.positions[0] + desc.mesh.positions[1] + desc.mesh.positions[2]) / 3.0;
+  Vec3& apex = desc.mesh.positions[3];
+  apex = base + (apex - base) * 0.01;
+  StabilityCase c = fromBody("sliver", "tetrahedron flattened to 1 % of its height (hinge levers 1 % of edge)", desc);
+  Vec3& lifted = c.positions[c.model.bodies[0].modelVertex[3]];  // the apex, in model numbering
+  lifted = lifted + (lifted - base) * 0.5;
+  return c;
+}
+
+StabilityCase degenerateSliver() {
+  BodyDesc desc = ball(0.05, 0.03, 0.5, 2.0);
+  desc.name = "degenerate";
+  desc.mesh = makeTetrahedron(1.0);
+  // Apex on the base plane's edge line: a hinge with |r| = 0 and a zero-area face.
+  desc.mesh.positions[3] = (desc.mesh.positions[0] + desc.mesh.positions[1]) * 0.5;
+  return fromBody("degenerate sliver", "tetrahedron with its apex on an edge (|r| = 0): refused at load", desc);
+}
+
+StabilityCase flatHinge() {
+  StabilityCase c = hingeCase(0.01, 0.1, 1e-6, 0.3);
+  c.name = "flat hinge";
+  c.description = "hinge with theta0 = 1e-6 (flat), P_theta = 10 ms, released at 0.3 rad";
+  return c;
+}
+
+StabilityCase foldedHinge() {
+  StabilityCase c = hingeCase(0.01, 0.1, 3.1, -3.0);
+  c.name = "folded hinge";
+  c.description = "hinge with theta0 = 3.1 rad, released at -3.0 (through +-pi, where the angle wraps)";
+  return c;
+}
+
+StabilityCase squashed() {
+  StabilityCase c = fromBody("squashed", "icosphere (P = 50 ms) squashed to a tenth of its height at t = 0",
+                             ball(0.05, 0.03, 0.5, 2.0));
+  for (Vec3& p : c.positions) p.y *= 0.1;
+  return c;
+}
+
+// Ten times the free-fall speed from 1 m (44 m/s) onto a thin triangle plate. The ball is stiffer
+// than the others (P = 20 ms, P_theta = 0.2 s) so that it physically survives the impact: with
+// P = 50 ms it turns inside out at any step (measured with RK4 at 20 us), and the case would
+// measure the physics, not the integrators.
+StabilityCase impact() {
+  BodyDesc desc = ball(0.02, 0.03, 0.2, 2.0);
+  desc.velocity = {0, -10.0 * std::sqrt(2 * 9.81 * 1.0), 0};
+  for (Vec3& p : desc.mesh.positions) p.y += 1.5;
+  StabilityCase c = fromBody("impact", "icosphere at 10x free-fall speed (44 m/s) onto a thin triangle", desc,
+                             {0, -9.81, 0});
+  TriangleCollider plate;
+  plate.name = "plate";
+  plate.mesh.positions = {{-3, 0, -3}, {3, 0, -3}, {0, 0, 4}};
+  plate.mesh.triangles = {{0, 2, 1}};
+  plate.buildBvh();
+  c.model.colliders.meshes.push_back(plate);
+  c.model.colliders.restingSpeed = 0.1;
+  c.model.initialVelocity = std::vector<Vec3>(c.model.mass.size(), desc.velocity);
+  return c;
+}
+
+// Stiffened as the impact case (P = 20 ms, P_theta = 0.2 s): with P = 50 ms the ball, hitting at
+// 31 m/s, physically squashes to 9% of its volume (RK4 at 20 us) and backward Euler's flattening
+// to 0% or just above was decided by rounding.
+StabilityCase gravity100g() {
+  BodyDesc desc = ball(0.02, 0.03, 0.2, 2.0);
+  for (Vec3& p : desc.mesh.positions) p.y += 1.5;
+  StabilityCase c = fromBody("gravity 100 g", "icosphere dropped from 0.5 m onto the ground under 981 m/s^2", desc,
+                             {0, -981.0, 0});
+  c.model.colliders.planes.push_back({{0, 0, 0}, {0, 1, 0}, {}});
+  c.model.colliders.restingSpeed = 4.0 * 981.0 * 1e-3;
+  return c;
+}
+
 }  // namespace
 
 StabilityCase strutCase(double period, double decay) {
@@ -164,134 +303,21 @@ StabilityCase hingeCase(double period, double decay, double restAngle, double st
 }
 
 std::vector<CaseFactory> stabilityCases() {
-  std::vector<CaseFactory> cases;
-  auto add = [&](std::string name, bool degenerate, bool stiff, std::function<StabilityCase()> make) {
-    cases.push_back({std::move(name), degenerate, stiff, std::move(make)});
-  };
-  add("stiff strut", false, false, [] {
-    StabilityCase c = strutCase(0.001, 0.1);
-    c.name = "stiff strut";
-    c.description = "two masses, one strut, P = 1 ms, T = 0.1 s";
-    return c;
-  });
-  add("stiff hinge", false, false, [] {
-    StabilityCase c = hingeCase(0.001, 0.1);
-    c.name = "stiff hinge";
-    c.description = "two triangles, one hinge, P_theta = 1 ms, T_theta = 0.1 s, released bent";
-    return c;
-  });
-  add("stiff ball", false, true, [] {
-    StabilityCase c = fromBody("stiff ball", "icosphere, P = P_theta = 1 ms, released squashed to 0.7",
-                               ball(0.001, 0.1, 0.001, 0.1));
-    for (Vec3& p : c.positions) p.y *= 0.7;
-    return c;
-  });
-  add("stiff gas", false, true, [] {
-    // The gas is the stiff term, and it stiffens as the volume falls (p V = const).
-    BodyDesc desc = ball(0.05, 0.1, 0.0, 0.0);
-    desc.volumePeriod = 0.0002;
-    StabilityCase c = fromBody("stiff gas", "icosphere, P = 50 ms, no hinges, gas P_V = 0.2 ms, released squashed to 0.7",
-                               desc);
-    for (Vec3& p : c.positions) p.y *= 0.7;
-    return c;
-  });
-  add("overdamped", false, true, [] {
-    StabilityCase c = fromBody("overdamped", "icosphere, P = 50 ms, T = 0.1 ms (T << P: damping is the stiff term)",
-                               ball(0.05, 1e-4, 0.5, 2.0));
-    for (Vec3& p : c.positions) p.y *= 0.7;
-    return c;
-  });
-  add("undamped", false, false, [] {
-    StabilityCase c = fromBody("undamped", "icosphere, P = 50 ms, P_theta = 0.5 s, no damping at all",
-                               ball(0.05, 0.0, 0.5, 0.0));
-    for (Vec3& p : c.positions) p.y *= 0.7;
-    return c;
-  });
-  add("mass ratio 1:1e4", false, true, [] {
-    // Tiny triangles beside large ones: a cube whose corner vertices are pulled almost onto
-    // their neighbours would do it geometrically; the masses are what matter for stability,
-    // so every other vertex of the ball gets 1e-4 of its mass (springs keep their constants).
-    StabilityCase c = fromBody("mass ratio 1:1e4", "icosphere, P = 50 ms, every other vertex 1e-4 times lighter",
-                               ball(0.05, 0.03, 0.5, 2.0));
-    for (std::size_t i = 0; i < c.model.mass.size(); i += 2) {
-      c.model.mass[i] *= 1e-4;
-      c.model.invMass[i] = 1.0 / c.model.mass[i];
-    }
-    for (Vec3& p : c.positions) p.y *= 0.9;
-    return c;
-  });
-  add("sliver", false, false, [] {
-    // A tetrahedron whose apex is pushed down to 1 % of its height: four sliver faces.
-    BodyDesc desc = ball(0.05, 0.03, 0.5, 2.0);
-    desc.name = "sliver";
-    desc.mesh = makeTetrahedron(1.0);
-    const Vec3 base = (desc.mesh.positions[0] + desc.mesh.positions[1] + desc.mesh.positions[2]) / 3.0;
-    Vec3& apex = desc.mesh.positions[3];
-    apex = base + (apex - base) * 0.01;
-    StabilityCase c = fromBody("sliver", "tetrahedron flattened to 1 % of its height (hinge levers 1 % of edge)", desc);
-    Vec3& lifted = c.positions[c.model.bodies[0].modelVertex[3]];  // the apex, in model numbering
-    lifted = lifted + (lifted - base) * 0.5;
-    return c;
-  });
-  add("degenerate sliver", true, false, [] {
-    BodyDesc desc = ball(0.05, 0.03, 0.5, 2.0);
-    desc.name = "degenerate";
-    desc.mesh = makeTetrahedron(1.0);
-    // Apex on the base plane's edge line: a hinge with |r| = 0 and a zero-area face.
-    desc.mesh.positions[3] = (desc.mesh.positions[0] + desc.mesh.positions[1]) * 0.5;
-    return fromBody("degenerate sliver", "tetrahedron with its apex on an edge (|r| = 0): refused at load", desc);
-  });
-  add("flat hinge", false, false, [] {
-    StabilityCase c = hingeCase(0.01, 0.1, 1e-6, 0.3);
-    c.name = "flat hinge";
-    c.description = "hinge with theta0 = 1e-6 (flat), P_theta = 10 ms, released at 0.3 rad";
-    return c;
-  });
-  add("folded hinge", false, false, [] {
-    StabilityCase c = hingeCase(0.01, 0.1, 3.1, -3.0);
-    c.name = "folded hinge";
-    c.description = "hinge with theta0 = 3.1 rad, released at -3.0 (through +-pi, where the angle wraps)";
-    return c;
-  });
-  add("squashed", false, false, [] {
-    StabilityCase c = fromBody("squashed", "icosphere (P = 50 ms) squashed to a tenth of its height at t = 0",
-                               ball(0.05, 0.03, 0.5, 2.0));
-    for (Vec3& p : c.positions) p.y *= 0.1;
-    return c;
-  });
-  add("impact", false, false, [] {
-    // Ten times the free-fall speed from 1 m (44 m/s) onto a thin triangle plate. The ball is
-    // stiffer than the others (P = 20 ms, P_theta = 0.2 s) so that it physically survives the
-    // impact: with P = 50 ms it turns inside out at any step (measured with RK4 at 20 us), and
-    // the case would measure the physics, not the integrators.
-    BodyDesc desc = ball(0.02, 0.03, 0.2, 2.0);
-    desc.velocity = {0, -10.0 * std::sqrt(2 * 9.81 * 1.0), 0};
-    for (Vec3& p : desc.mesh.positions) p.y += 1.5;
-    StabilityCase c = fromBody("impact", "icosphere at 10x free-fall speed (44 m/s) onto a thin triangle", desc,
-                               {0, -9.81, 0});
-    TriangleCollider plate;
-    plate.name = "plate";
-    plate.mesh.positions = {{-3, 0, -3}, {3, 0, -3}, {0, 0, 4}};
-    plate.mesh.triangles = {{0, 2, 1}};
-    plate.buildBvh();
-    c.model.colliders.meshes.push_back(plate);
-    c.model.colliders.restingSpeed = 0.1;
-    c.model.initialVelocity = std::vector<Vec3>(c.model.mass.size(), desc.velocity);
-    return c;
-  });
-  add("gravity 100 g", false, false, [] {
-    // Stiffened as the impact case (P = 20 ms, P_theta = 0.2 s): with P = 50 ms the ball, hitting
-    // at 31 m/s, physically squashes to 9% of its volume (RK4 at 20 us) and backward Euler's
-    // flattening to 0% or just above was decided by rounding.
-    BodyDesc desc = ball(0.02, 0.03, 0.2, 2.0);
-    for (Vec3& p : desc.mesh.positions) p.y += 1.5;
-    StabilityCase c = fromBody("gravity 100 g", "icosphere dropped from 0.5 m onto the ground under 981 m/s^2", desc,
-                               {0, -981.0, 0});
-    c.model.colliders.planes.push_back({{0, 0, 0}, {0, 1, 0}, {}});
-    c.model.colliders.restingSpeed = 4.0 * 981.0 * 1e-3;
-    return c;
-  });
-  return cases;
+  // name, degenerate (must be refused at load), stiff, the case
+  return {{"stiff strut", false, false, stiffStrut},
+          {"stiff hinge", false, false, stiffHinge},
+          {"stiff ball", false, true, stiffBall},
+          {"stiff gas", false, true, stiffGas},
+          {"overdamped", false, true, overdamped},
+          {"undamped", false, false, undamped},
+          {"mass ratio 1:1e4", false, true, massRatio},
+          {"sliver", false, false, sliver},
+          {"degenerate sliver", true, false, degenerateSliver},
+          {"flat hinge", false, false, flatHinge},
+          {"folded hinge", false, false, foldedHinge},
+          {"squashed", false, false, squashed},
+          {"impact", false, false, impact},
+          {"gravity 100 g", false, false, gravity100g}};
 }
 
 }  // namespace springy

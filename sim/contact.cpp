@@ -159,35 +159,10 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
   bodies_.resize(model.bodies.size());
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     const BodyInfo& info = model.bodies[b];
-    Body& body = bodies_[b];
     if (!info.contact && !info.selfContact) continue;
-    active_.push_back(b);
-    body.self = info.selfContact;
-    body.friction = info.contactFriction;
-    body.restitution = info.contactRestitution;
-    // The edges, each once, from the faces.
-    for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
-      const Triangle& t = model.faces[f];
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t i = t[static_cast<std::size_t>(k)], j = t[static_cast<std::size_t>((k + 1) % 3)];
-        body.edges.push_back({std::min(i, j), std::max(i, j)});
-      }
-    }
-    std::sort(body.edges.begin(), body.edges.end());
-    body.edges.erase(std::unique(body.edges.begin(), body.edges.end()), body.edges.end());
-    double sum = 0.0;
-    for (const auto& e : body.edges) sum += length(model.restPosition[e[1]] - model.restPosition[e[0]]);
-    body.thickness = info.contactThickness > 0.0 ? info.contactThickness
-                                                 : kDefaultThicknessFactor * sum /
-                                                       static_cast<double>(std::max<std::size_t>(1, body.edges.size()));
+    addActive(b);
   }
-  double primitives = 0.0;
-  for (uint32_t b : active_) {
-    primitives +=
-        model.bodies[b].vertexCount + model.bodies[b].faceCount + static_cast<double>(bodies_[b].edges.size());
-  }
-  for (const Static& s : statics_) primitives += static_cast<double>(s.vertices.size() + s.edges.size());
-  maxCandidates_ = kMaxCandidatesPerPrimitive * primitives;
+  setCandidateBudget();
   vertexBox_.assign(vertexCount_, Box{});
   fatBox_.assign(vertexCount_, Box{});
   kept_.resize(active_.size() * (active_.size() + statics_.size()));
@@ -196,46 +171,84 @@ BodyContacts::BodyContacts(const Model& model) : model_(&model) {
     const BodyInfo& info = model.bodies[b];
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) vertexBody_[i] = b;
   }
-  // Self pairs closer than h at rest are not contacts (a mesh may start with parts that nearly
-  // touch): found once with boxes grown by h, then measured.
   for (uint32_t b : active_) {
-    Body& body = bodies_[b];
-    if (!body.self) continue;
-    const BodyInfo& info = model.bodies[b];
-    const std::vector<Vec3>& x = model.restPosition;
-    const double h = body.thickness;
-    std::vector<Box> vertexBoxes, faceBoxes, edgeBoxes;
-    for (uint32_t i = 0; i < info.vertexCount; ++i)
-      vertexBoxes.push_back(sweptBox({x[info.firstVertex + i], x[info.firstVertex + i]}, h));
-    for (uint32_t f = 0; f < info.faceCount; ++f) {
-      const Triangle& t = model.faces[info.firstFace + f];
-      faceBoxes.push_back(sweptBox({x[t[0]], x[t[0]]}, {x[t[1]], x[t[1]]}, {x[t[2]], x[t[2]]}, h));
+    if (bodies_[b].self) findRestPairs(b);
+  }
+}
+
+void BodyContacts::addActive(uint32_t b) {
+  const Model& model = *model_;
+  const BodyInfo& info = model.bodies[b];
+  Body& body = bodies_[b];
+  active_.push_back(b);
+  body.self = info.selfContact;
+  body.friction = info.contactFriction;
+  body.restitution = info.contactRestitution;
+  // The edges, each once, from the faces.
+  for (uint32_t f = info.firstFace; f < info.firstFace + info.faceCount; ++f) {
+    const Triangle& t = model.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = t[static_cast<std::size_t>(k)], j = t[static_cast<std::size_t>((k + 1) % 3)];
+      body.edges.push_back({std::min(i, j), std::max(i, j)});
     }
-    for (const auto& e : body.edges) edgeBoxes.push_back(sweptBox({x[e[0]], x[e[0]]}, {x[e[1]], x[e[1]]}, h));
-    Bvh vt, ft, et;
-    vt.build(vertexBoxes), ft.build(faceBoxes), et.build(edgeBoxes);
-    std::vector<PrimitivePair> pairs;
-    overlapPairs(
-        vt, ft,
-        [&](uint32_t v, uint32_t f) {
-          const Triangle& t = model.faces[info.firstFace + f];
-          const uint32_t i = info.firstVertex + v;
-          return t[0] == i || t[1] == i || t[2] == i;
-        },
-        pairs);
-    for (const PrimitivePair& p : pairs) {
-      const Triangle& t = model.faces[info.firstFace + p.b];
-      const PointTriangleClosest c = closestPointTriangle(x[info.firstVertex + p.a], x[t[0]], x[t[1]], x[t[2]]);
-      if (c.distanceSquared < h * h) body.restVertexFace.push_back(p);
-    }
-    pairs.clear();
-    selfOverlapPairs(
-        et, [&](uint32_t e, uint32_t f) { return sharesVertex(body.edges[e], body.edges[f]); }, pairs);
-    for (const PrimitivePair& p : pairs) {
-      const auto &e = body.edges[p.a], &f = body.edges[p.b];
-      const SegmentSegmentClosest c = closestSegmentSegment(x[e[0]], x[e[1]], x[f[0]], x[f[1]]);
-      if (c.distanceSquared < h * h) body.restEdgeEdge.push_back(p);
-    }
+  }
+  std::sort(body.edges.begin(), body.edges.end());
+  body.edges.erase(std::unique(body.edges.begin(), body.edges.end()), body.edges.end());
+  double sum = 0.0;
+  for (const auto& e : body.edges) sum += length(model.restPosition[e[1]] - model.restPosition[e[0]]);
+  body.thickness = info.contactThickness > 0.0 ? info.contactThickness
+                                               : kDefaultThicknessFactor * sum /
+                                                     static_cast<double>(std::max<std::size_t>(1, body.edges.size()));
+}
+
+void BodyContacts::setCandidateBudget() {
+  const Model& model = *model_;
+  double primitives = 0.0;
+  for (uint32_t b : active_) {
+    primitives +=
+        model.bodies[b].vertexCount + model.bodies[b].faceCount + static_cast<double>(bodies_[b].edges.size());
+  }
+  for (const Static& s : statics_) primitives += static_cast<double>(s.vertices.size() + s.edges.size());
+  maxCandidates_ = kMaxCandidatesPerPrimitive * primitives;
+}
+
+void BodyContacts::findRestPairs(uint32_t b) {
+  const Model& model = *model_;
+  Body& body = bodies_[b];
+  const BodyInfo& info = model.bodies[b];
+  const std::vector<Vec3>& x = model.restPosition;
+  const double h = body.thickness;
+  std::vector<Box> vertexBoxes, faceBoxes, edgeBoxes;
+  for (uint32_t i = 0; i < info.vertexCount; ++i)
+    vertexBoxes.push_back(sweptBox({x[info.firstVertex + i], x[info.firstVertex + i]}, h));
+  for (uint32_t f = 0; f < info.faceCount; ++f) {
+    const Triangle& t = model.faces[info.firstFace + f];
+    faceBoxes.push_back(sweptBox({x[t[0]], x[t[0]]}, {x[t[1]], x[t[1]]}, {x[t[2]], x[t[2]]}, h));
+  }
+  for (const auto& e : body.edges) edgeBoxes.push_back(sweptBox({x[e[0]], x[e[0]]}, {x[e[1]], x[e[1]]}, h));
+  Bvh vt, ft, et;
+  vt.build(vertexBoxes), ft.build(faceBoxes), et.build(edgeBoxes);
+  std::vector<PrimitivePair> pairs;
+  overlapPairs(
+      vt, ft,
+      [&](uint32_t v, uint32_t f) {
+        const Triangle& t = model.faces[info.firstFace + f];
+        const uint32_t i = info.firstVertex + v;
+        return t[0] == i || t[1] == i || t[2] == i;
+      },
+      pairs);
+  for (const PrimitivePair& p : pairs) {
+    const Triangle& t = model.faces[info.firstFace + p.b];
+    const PointTriangleClosest c = closestPointTriangle(x[info.firstVertex + p.a], x[t[0]], x[t[1]], x[t[2]]);
+    if (c.distanceSquared < h * h) body.restVertexFace.push_back(p);
+  }
+  pairs.clear();
+  selfOverlapPairs(
+      et, [&](uint32_t e, uint32_t f) { return sharesVertex(body.edges[e], body.edges[f]); }, pairs);
+  for (const PrimitivePair& p : pairs) {
+    const auto &e = body.edges[p.a], &f = body.edges[p.b];
+    const SegmentSegmentClosest c = closestSegmentSegment(x[e[0]], x[e[1]], x[f[0]], x[f[1]]);
+    if (c.distanceSquared < h * h) body.restEdgeEdge.push_back(p);
   }
 }
 
@@ -425,10 +438,8 @@ bool BodyContacts::staticContacts(uint32_t b, const Static& s, Candidates& kept,
   return ok;
 }
 
-bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* counted) {
-  uint64_t candidates = 0;
+void BodyContacts::sweepBodies(const std::vector<Vec3>& x0, double dt) {
   const Model& model = *model_;
-  out.clear();
   // Each moved body's swept box first, from its vertices' (one pass over them, which also tells
   // whether each is still inside its fat box): the boxes of a body that is near no other and has
   // no self contact are not needed this pass.
@@ -457,6 +468,10 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
     body.outside = body.outside || !inside(vertex, fatBox_[i]);
     body.box = merged(body.box, vertex);
   }
+}
+
+void BodyContacts::markNearBodies() {
+  const Model& model = *model_;
   for (uint32_t b : active_) {
     bodies_[b].near = bodies_[b].self;
     for (const Static& s : statics_)
@@ -475,14 +490,18 @@ bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vec
     Body& body = bodies_[b];
     if (body.near && (body.fat == 0 || body.outside)) refreshFat(b);
   }
+}
+
+bool BodyContacts::findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* counted) {
+  uint64_t candidates = 0;
+  const Model& model = *model_;
+  out.clear();
+  sweepBodies(x0, dt);
+  markNearBodies();
   // The pairs with a body that moved since the last pass (all on the first): a pair of two bodies
   // that did not has had every contact satisfied in that pass, or they would have moved. The kept
   // candidates of pairs that are not near are dropped on the first pass.
   const std::size_t n = active_.size();
-  const auto keptAt = [&](std::size_t index) -> Candidates& {
-    if (!kept_[index]) kept_[index] = std::make_unique<Candidates>();
-    return *kept_[index];
-  };
   bool ok = true;
   for (std::size_t k = 0; ok && k < n; ++k) {
     const uint32_t a = active_[k];
@@ -648,7 +667,7 @@ bool BodyContacts::resolve(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, s
   return changed;
 }
 
-bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
+bool BodyContacts::beginStep(const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, double dt) {
   const Model& model = *model_;
   last_ = ContactStats{};
   for (uint32_t i : contactList_) contactOf_[i] = 0;
@@ -672,21 +691,27 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
   dirtyList_.clear(), touchedList_.clear();
   full_ = true;
   applied_.clear();
-  // 1. Impulses, pass after pass, until no contact needs one.
-  bool any = false, settled = false;
+  return true;
+}
+
+void BodyContacts::markContactVertices() {
+  for (const Contact& c : contacts_) {
+    for (int k = 0; k < 4; ++k) {
+      const uint32_t i = c.vertex[k];
+      if (c.weight[k] == 0.0 || i >= vertexCount_ || contactOf_[i]) continue;
+      contactOf_[i] = 1;
+      contactList_.push_back(i);
+    }
+  }
+}
+
+bool BodyContacts::applyImpulses(const std::vector<Vec3>& x0, double dt, bool& any, bool& settled) {
   for (int pass = 0; pass < impulsePasses_ && !settled; ++pass) {
-    if (!findContacts(x0, dt, contacts_, pass == 0 ? &last_.candidates : nullptr)) return overflow(x0, x1, v1, dt);
+    if (!findContacts(x0, dt, contacts_, pass == 0 ? &last_.candidates : nullptr)) return false;
     ++last_.passes;
     if (pass == 0) {
       last_.contacts = contacts_.size();
-      for (const Contact& c : contacts_) {
-        for (int k = 0; k < 4; ++k) {
-          const uint32_t i = c.vertex[k];
-          if (c.weight[k] == 0.0 || i >= vertexCount_ || contactOf_[i]) continue;
-          contactOf_[i] = 1;
-          contactList_.push_back(i);
-        }
-      }
+      markContactVertices();
     }
     bool applied = false;
     for (const Contact& c : contacts_) {
@@ -699,41 +724,47 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
     settled = !applied;
     if (applied) markMoved();
   }
-  if (!any && impulsePasses_ > 0) return false;
-  // 2. Fail-safe: stop every vertex still in an approaching contact, until none is left (a
-  // pass that needed no impulse has none left).
+  return true;
+}
+
+void BodyContacts::stopVertices(const Contact& c, std::vector<Vec3>& v1, bool& stoppedAny, bool& stoppedNow) {
+  for (uint32_t i : c.vertex) {
+    if (inverseMass(i) == 0.0 || stopped_[i]) continue;
+    if (!stoppedAny) std::iota(group_.begin(), group_.end(), 0u);
+    v1[i] += u_[i] - u0_[i] - push_[i];  // the impulses it took so far, whose other halves stay applied
+    stopped_[i] = 1;
+    touch(i);
+    u_[i] = Vec3{};
+    stoppedAny = stoppedNow = true;
+    ++last_.stopped;
+  }
+  // The contact's stopped vertices form one group.
+  uint32_t first = UINT32_MAX;
+  for (uint32_t i : c.vertex) {
+    if (!stopped_[i]) continue;
+    if (first == UINT32_MAX)
+      first = i;
+    else
+      group_[findRoot(group_, i)] = findRoot(group_, first);
+  }
+}
+
+bool BodyContacts::failSafe(const std::vector<Vec3>& x0, std::vector<Vec3>& v1, double dt, bool& stoppedAny) {
   const auto approaching = [&](const Contact& c) { return normalSpeed(c) < -1e-9 * c.thickness / dt; };
-  bool stoppedAny = false;
-  while (!settled) {
-    if (!findContacts(x0, dt, contacts_, nullptr)) return overflow(x0, x1, v1, dt);
+  for (;;) {
+    if (!findContacts(x0, dt, contacts_, nullptr)) return false;
     ++last_.passes;
     bool stoppedNow = false;
     for (const Contact& c : contacts_) {
-      if (!approaching(c)) continue;
-      for (uint32_t i : c.vertex) {
-        if (inverseMass(i) == 0.0 || stopped_[i]) continue;
-        if (!stoppedAny) std::iota(group_.begin(), group_.end(), 0u);
-        v1[i] += u_[i] - u0_[i] - push_[i];  // the impulses it took so far, whose other halves stay applied
-        stopped_[i] = 1;
-        touch(i);
-        u_[i] = Vec3{};
-        stoppedAny = stoppedNow = true;
-        ++last_.stopped;
-      }
-      // The contact's stopped vertices form one group.
-      uint32_t first = UINT32_MAX;
-      for (uint32_t i : c.vertex) {
-        if (!stopped_[i]) continue;
-        if (first == UINT32_MAX)
-          first = i;
-        else
-          group_[findRoot(group_, i)] = findRoot(group_, first);
-      }
+      if (approaching(c)) stopVertices(c, v1, stoppedAny, stoppedNow);
     }
-    if (!stoppedNow) break;
+    if (!stoppedNow) return true;
     markMoved();
   }
-  // 3. New positions and end velocities.
+}
+
+void BodyContacts::moveChanged(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
+  const Model& model = *model_;
   for (uint32_t b : active_) {
     const BodyInfo& info = model.bodies[b];
     for (uint32_t i = info.firstVertex; i < info.firstVertex + info.vertexCount; ++i) {
@@ -742,27 +773,41 @@ bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x
       v1[i] += u_[i] - u0_[i] - push_[i];
     }
   }
-  settleEndVelocities(v1);
-  if (stoppedAny) {
-    // Each group of stopped vertices keeps its momentum: they all take its mass-weighted mean
-    // end velocity (the integrator's, plus the impulses taken before stopping). Sums in vertex
-    // order, per group root.
-    for (uint32_t i = 0; i < model.vertexCount(); ++i) {
-      if (stopped_[i]) groupMomentum_[findRoot(group_, i)] = Vec3{}, groupMass_[findRoot(group_, i)] = 0.0;
-    }
-    for (uint32_t i = 0; i < model.vertexCount(); ++i) {
-      if (!stopped_[i]) continue;
-      const uint32_t r = findRoot(group_, i);
-      groupMomentum_[r] += v1[i] * model.mass[i];
-      groupMass_[r] += model.mass[i];
-    }
-    for (uint32_t i = 0; i < model.vertexCount(); ++i) {
-      if (!stopped_[i]) continue;
-      const uint32_t r = findRoot(group_, i);
-      x1[i] = x0[i];
-      v1[i] = groupMomentum_[r] / groupMass_[r];
-    }
+}
+
+void BodyContacts::shareGroupMomentum(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1) {
+  const Model& model = *model_;
+  for (uint32_t i = 0; i < model.vertexCount(); ++i) {
+    if (stopped_[i]) groupMomentum_[findRoot(group_, i)] = Vec3{}, groupMass_[findRoot(group_, i)] = 0.0;
   }
+  for (uint32_t i = 0; i < model.vertexCount(); ++i) {
+    if (!stopped_[i]) continue;
+    const uint32_t r = findRoot(group_, i);
+    groupMomentum_[r] += v1[i] * model.mass[i];
+    groupMass_[r] += model.mass[i];
+  }
+  for (uint32_t i = 0; i < model.vertexCount(); ++i) {
+    if (!stopped_[i]) continue;
+    const uint32_t r = findRoot(group_, i);
+    x1[i] = x0[i];
+    v1[i] = groupMomentum_[r] / groupMass_[r];
+  }
+}
+
+bool BodyContacts::resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt) {
+  if (!beginStep(x0, x1, dt)) return false;
+  // 1. Impulses, pass after pass, until no contact needs one.
+  bool any = false, settled = false;
+  if (!applyImpulses(x0, dt, any, settled)) return overflow(x0, x1, v1, dt);
+  if (!any && impulsePasses_ > 0) return false;
+  // 2. Fail-safe: stop every vertex still in an approaching contact, until none is left (a
+  // pass that needed no impulse has none left).
+  bool stoppedAny = false;
+  if (!settled && !failSafe(x0, v1, dt, stoppedAny)) return overflow(x0, x1, v1, dt);
+  // 3. New positions and end velocities.
+  moveChanged(x0, x1, v1, dt);
+  settleEndVelocities(v1);
+  if (stoppedAny) shareGroupMomentum(x0, x1, v1);
   return true;
 }
 

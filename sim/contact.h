@@ -180,6 +180,13 @@ class BodyContacts {
   }
   double inverseMass(uint32_t i) const { return i < vertexCount_ ? model_->invMass[i] : 0.0; }
   void addStatics();
+  // Steps of the constructor. Body b takes part: its edges and its thickness.
+  void addActive(uint32_t b);
+  // maxCandidates_: kMaxCandidatesPerPrimitive times the primitives that take part.
+  void setCandidateBudget();
+  // Body b's self pairs closer than its thickness at rest, which are not contacts (a mesh may
+  // start with parts that nearly touch): found once with boxes grown by the thickness, then measured.
+  void findRestPairs(uint32_t b);
   // Step 4 of resolveStep(): the end velocities at the contacts that took an impulse.
   void settleEndVelocities(std::vector<Vec3>& v1);
   bool staticContacts(uint32_t b, const Static& s, Candidates& kept, const std::vector<Vec3>& x0, double dt,
@@ -195,6 +202,25 @@ class BodyContacts {
   // Ends a step whose search overflowed: keeps the impulses applied so far, counts it.
   bool overflow(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
   bool resolveStep(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
+  // Steps of resolveStep(). The step's paths' average velocities and the per-step state reset;
+  // false when the state is not finite (nothing to resolve).
+  bool beginStep(const std::vector<Vec3>& x0, const std::vector<Vec3>& x1, double dt);
+  // Step 1: passes of impulses until one needs none (settled) or kImpulsePasses are done; `any`:
+  // an impulse was applied. False on an overflow.
+  bool applyImpulses(const std::vector<Vec3>& x0, double dt, bool& any, bool& settled);
+  // Marks the vertices of the first pass's contacts (touching()).
+  void markContactVertices();
+  // Step 2, the fail-safe: stops the vertices of approaching contacts until none is left. False
+  // on an overflow; `stoppedAny`: a vertex was stopped.
+  bool failSafe(const std::vector<Vec3>& x0, std::vector<Vec3>& v1, double dt, bool& stoppedAny);
+  // Stops the movable vertices of contact c and joins its stopped vertices into one group.
+  void stopVertices(const Contact& c, std::vector<Vec3>& v1, bool& stoppedAny, bool& stoppedNow);
+  // Step 3: the changed paths' end positions and velocities (of the vertices not stopped).
+  void moveChanged(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1, double dt);
+  // Each group of stopped vertices keeps its momentum: they all stay where they were and take its
+  // mass-weighted mean end velocity (the integrator's, plus the impulses taken before stopping).
+  // Sums in vertex order, per group root.
+  void shareGroupMomentum(const std::vector<Vec3>& x0, std::vector<Vec3>& x1, std::vector<Vec3>& v1);
   // An edge's or face's swept box this pass: its corners' merged (sweptBox() computes it so, the
   // same bits).
   Box edgeBox(const std::array<uint32_t, 2>& e) const { return merged(vertexBox_[e[0]], vertexBox_[e[1]]); }
@@ -205,6 +231,16 @@ class BodyContacts {
   void trimKept(Candidates& kept) const;
   // Every contact on the current paths, in a fixed order; false on an overflow (out incomplete).
   bool findContacts(const std::vector<Vec3>& x0, double dt, std::vector<Contact>& out, uint64_t* candidates);
+  // Steps of findContacts(). The swept boxes of the vertices with new paths and of their bodies.
+  void sweepBodies(const std::vector<Vec3>& x0, double dt);
+  // Which bodies are near another, a collider or themselves (Body::near); new fat boxes for those
+  // whose vertices left theirs.
+  void markNearBodies();
+  // The kept candidates at kept_[index], made when first needed.
+  Candidates& keptAt(std::size_t index) {
+    if (!kept_[index]) kept_[index] = std::make_unique<Candidates>();
+    return *kept_[index];
+  }
   bool pairContacts(uint32_t a, uint32_t b, Candidates& kept, const std::vector<Vec3>& x0, double dt,
                     std::vector<Contact>& out, uint64_t& candidates);
   // The contact's relative normal speed on the current paths.

@@ -38,19 +38,11 @@ uint32_t firstAtLeast(uint32_t lo, uint32_t hi, uint32_t bound, Key key) {
   return lo;
 }
 
-}  // namespace
 
-BodyMeasures measureBody(const World& world, uint32_t body) {
-  return measureBody(world, body, world.positions().data(), world.velocities().data());
-}
-
-BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const Vec3* v) {
-  const Model& model = world.model();
-  const BodyInfo& info = model.bodies[body];
-  const uint32_t regions = std::max(1u, (info.vertexCount + kRegionVertices - 1) / kRegionVertices);
-  // Element boundaries of the regions: struts by their first end (i < j), hinges by the lower
-  // vertex of their edge.
-  std::vector<uint32_t> strutAt(regions + 1), hingeAt(regions + 1);
+// Step of measureBody: the element boundaries of the body's regions (regions + 1 each): struts
+// by their first end (i < j), hinges by the lower vertex of their edge.
+void regionBoundaries(const Model& model, const BodyInfo& info, uint32_t regions, std::vector<uint32_t>& strutAt,
+                      std::vector<uint32_t>& hingeAt) {
   strutAt[0] = info.firstStrut, strutAt[regions] = info.firstStrut + info.strutCount;
   hingeAt[0] = info.firstHinge, hingeAt[regions] = info.firstHinge + info.hingeCount;
   for (uint32_t r = 1; r < regions; ++r) {
@@ -61,54 +53,42 @@ BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const
       return std::min(model.hinges[h].v[0], model.hinges[h].v[1]);
     });
   }
-  // The volume in enclosedVolume's chunks, so that it is that function's number exactly; the
-  // regions take the chunks in proportion.
-  const uint32_t chunks = volumeChunkCount(info);
-  std::vector<double> chunkSum(chunks);
-  std::vector<RegionSums> sums(regions);
-  // The moving planes where they are now.
-  std::vector<Pose> planePoses;
-  if (model.colliders.moving()) {
-    for (const PlaneCollider& pl : model.colliders.planes) planePoses.push_back(pl.motion.pose(world.time()));
+}
+
+// Step of measureBody: the sums over the vertices [begin, end) of one region, in two passes,
+// positions then motion: one would hold more running sums than there are registers, and the
+// spilled ones wait on memory. `poses`: the moving planes where they are now (or nullptr).
+RegionSums sumRegionVertices(const Model& model, const Vec3* x, const Vec3* v, uint32_t begin, uint32_t end,
+                             const Pose* poses) {
+  RegionSums m;  // a local, so that the running sums stay in registers
+  m.lo = m.hi = x[begin];
+  bool finite = true;
+  for (uint32_t i = begin; i < end; ++i) {
+    const double mi = model.mass[i];
+    finite = finite && isFinite(x[i]);
+    m.mass += mi;
+    m.centroid += x[i] * mi;
+    m.gravitational -= mi * dot(model.gravity, x[i]);
+    m.lo = componentMin(m.lo, x[i]);
+    m.hi = componentMax(m.hi, x[i]);
+    m.penetration = std::max(m.penetration, model.colliders.planePenetration(x[i], poses));
   }
-  const Pose* poses = planePoses.empty() ? nullptr : planePoses.data();
-  world.parallelFor(regions, [&](std::size_t first, std::size_t last) {
-    for (std::size_t r = first; r < last; ++r) {
-      RegionSums m;  // a local, so that the running sums stay in registers
-      const uint32_t begin = info.firstVertex + static_cast<uint32_t>(r) * kRegionVertices;
-      const uint32_t end = std::min(begin + kRegionVertices, info.firstVertex + info.vertexCount);
-      m.lo = m.hi = x[begin];
-      // Two passes, positions then motion: one would hold more running sums than there are
-      // registers, and the spilled ones wait on memory.
-      bool finite = true;
-      for (uint32_t i = begin; i < end; ++i) {
-        const double mi = model.mass[i];
-        finite = finite && isFinite(x[i]);
-        m.mass += mi;
-        m.centroid += x[i] * mi;
-        m.gravitational -= mi * dot(model.gravity, x[i]);
-        m.lo = componentMin(m.lo, x[i]);
-        m.hi = componentMax(m.hi, x[i]);
-        m.penetration = std::max(m.penetration, model.colliders.planePenetration(x[i], poses));
-      }
-      for (uint32_t i = begin; i < end; ++i) {
-        const double mi = model.mass[i];
-        finite = finite && isFinite(v[i]);
-        m.momentum += v[i] * mi;
-        m.angularMomentum += cross(x[i], v[i]) * mi;
-        m.kinetic += 0.5 * mi * lengthSquared(v[i]);
-        m.speedSquared += lengthSquared(v[i]);
-      }
-      m.finite = finite;
-      const StrutMeasures struts = measureStruts(model.struts.data(), strutAt[r], strutAt[r + 1], x);
-      m.elastic = struts.energy + hingeEnergy(model.hinges.data(), hingeAt[r], hingeAt[r + 1], x);
-      m.maxStrain = struts.maxStrain;
-      for (std::size_t c = r * chunks / regions; c < (r + 1) * chunks / regions; ++c) {
-        chunkSum[c] = chunkSixVolume(model, body, static_cast<uint32_t>(c), x);
-      }
-      sums[r] = m;
-    }
-  });
+  for (uint32_t i = begin; i < end; ++i) {
+    const double mi = model.mass[i];
+    finite = finite && isFinite(v[i]);
+    m.momentum += v[i] * mi;
+    m.angularMomentum += cross(x[i], v[i]) * mi;
+    m.kinetic += 0.5 * mi * lengthSquared(v[i]);
+    m.speedSquared += lengthSquared(v[i]);
+  }
+  m.finite = finite;
+  return m;
+}
+
+// Step of measureBody: the regions' sums combined in region order (the same numbers on every
+// thread count), and the volume from enclosedVolume's chunks' sums.
+BodyMeasures combineRegions(const BodyInfo& info, const std::vector<RegionSums>& sums,
+                            const std::vector<double>& chunkSum) {
   BodyMeasures m;
   double totalMass = 0.0, speedSquared = 0.0;
   Bounds b = {sums[0].lo, sums[0].hi};
@@ -135,6 +115,46 @@ BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const
   m.volume = info.open ? 0.0 : six / 6.0;  // an open surface encloses none
   m.elastic += gasEnergy(info, m.volume);
   return m;
+}
+
+}  // namespace
+
+BodyMeasures measureBody(const World& world, uint32_t body) {
+  return measureBody(world, body, world.positions().data(), world.velocities().data());
+}
+
+BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const Vec3* v) {
+  const Model& model = world.model();
+  const BodyInfo& info = model.bodies[body];
+  const uint32_t regions = std::max(1u, (info.vertexCount + kRegionVertices - 1) / kRegionVertices);
+  std::vector<uint32_t> strutAt(regions + 1), hingeAt(regions + 1);
+  regionBoundaries(model, info, regions, strutAt, hingeAt);
+  // The volume in enclosedVolume's chunks, so that it is that function's number exactly; the
+  // regions take the chunks in proportion.
+  const uint32_t chunks = volumeChunkCount(info);
+  std::vector<double> chunkSum(chunks);
+  std::vector<RegionSums> sums(regions);
+  // The moving planes where they are now.
+  std::vector<Pose> planePoses;
+  if (model.colliders.moving()) {
+    for (const PlaneCollider& pl : model.colliders.planes) planePoses.push_back(pl.motion.pose(world.time()));
+  }
+  const Pose* poses = planePoses.empty() ? nullptr : planePoses.data();
+  world.parallelFor(regions, [&](std::size_t first, std::size_t last) {
+    for (std::size_t r = first; r < last; ++r) {
+      const uint32_t begin = info.firstVertex + static_cast<uint32_t>(r) * kRegionVertices;
+      const uint32_t end = std::min(begin + kRegionVertices, info.firstVertex + info.vertexCount);
+      RegionSums m = sumRegionVertices(model, x, v, begin, end, poses);
+      const StrutMeasures struts = measureStruts(model.struts.data(), strutAt[r], strutAt[r + 1], x);
+      m.elastic = struts.energy + hingeEnergy(model.hinges.data(), hingeAt[r], hingeAt[r + 1], x);
+      m.maxStrain = struts.maxStrain;
+      for (std::size_t c = r * chunks / regions; c < (r + 1) * chunks / regions; ++c) {
+        chunkSum[c] = chunkSixVolume(model, body, static_cast<uint32_t>(c), x);
+      }
+      sums[r] = m;
+    }
+  });
+  return combineRegions(info, sums, chunkSum);
 }
 
 uint64_t stateHash(const World& world) {

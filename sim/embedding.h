@@ -1,6 +1,6 @@
 // springy: a render mesh embedded in a simulated surface.
 //
-// When a body is simulated through a proxy (sim/proxy.h), what the video shows is still the mesh
+// When a body is simulated through a proxy (mesh/proxy.h), what the video shows is still the mesh
 // the user gave, whatever its topology (holes, pieces, its own vertex count): each of its
 // vertices is bound once, at rest, to the nearest triangle of the simulated surface, with
 // coordinates in that triangle's frame, and is placed from the triangle's corners every frame

@@ -63,6 +63,89 @@ std::string stepAdvice(const BodyInfo& body) {
          (body.gasPressure > 0.0 ? " / volume_period" : "") + "); `springy suggest` estimates a stable dt.";
 }
 
+
+// Step of Monitor::check: a contact search that overflowed did not act, and the bodies' state
+// explains why: reported first.
+std::optional<Failure> contactOverflowFailure(const World& world) {
+  const Model& model = world.model();
+  const BodyContacts* contacts = world.bodyContacts();
+  if (!contacts || contacts->sinceStart().overflows == 0) return std::nullopt;
+  const auto [a, b] = contacts->overflowPair();
+  std::ostringstream s;
+  s << "the contact search between it and " << (a == b ? "itself" : "body '" + model.bodies[b].name + "'")
+    << " found more than " << kMaxCandidatesPerPrimitive
+    << " candidate pairs per primitive (bodies that have blown up, or start inside each other)";
+  return Failure{a, world.stepCount(), world.time(), describe(world, a, s.str(), stepAdvice(model.bodies[a]))};
+}
+
+// The failure of a body whose volume fell to `ratio` of rest, below the required `minVolume`
+// (a limit the run was given, not an instability), with what would keep its shape.
+Failure volumeFailure(const World& world, uint32_t b, double ratio, double minVolume) {
+  const BodyInfo& info = world.model().bodies[b];
+  std::ostringstream s;
+  s << "its volume fell to " << 100.0 * ratio << "% of rest, below the required " << 100.0 * minVolume << "%";
+  Failure failure{b, world.stepCount(), world.time(),
+                  describe(world, b, s.str(),
+                           info.membraneModulus > 0.0
+                               ? "The body is too soft to keep its shape: try a shorter bend_period or stretch_period "
+                                 "(`springy suggest --keep-volume` finds them), or a gas (volume_period)."
+                               : "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
+                                 "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
+                                 "strut_period, or the body material (scenes/README.md), which means the same at "
+                                 "every resolution.")};
+  if (ratio <= 0.0 && !info.selfContact) {
+    // Inside out: a crush folded it through itself, which its own contact would stop.
+    failure.message += " It turned inside out: with self_contact = true its own faces stop it folding through "
+                       "itself (docs/model.md section 19; it costs run time).";
+  }
+  failure.criterion = true;
+  return failure;
+}
+
+// Step of Monitor::check: bodies crossing each other or themselves: whatever the contact stage
+// did, never a silent pass-through (sim/intersections.h).
+std::optional<Failure> bodyCrossingFailure(const World& world) {
+  const Model& model = world.model();
+  if (world.bodyContacts() == nullptr) return std::nullopt;
+  const std::vector<Intersection> crossing = findIntersections(model, world.positions(), 1);
+  if (crossing.empty()) return std::nullopt;
+  const Intersection& c = crossing[0];
+  const BodyInfo &a = model.bodies[c.bodyA], &b = model.bodies[c.bodyB];
+  std::ostringstream s;
+  if (c.bodyA == c.bodyB) {
+    s << "it passes through itself: its faces " << c.faceA - a.firstFace << " and " << c.faceB - a.firstFace;
+  } else {
+    s << "it passes through body '" << b.name << "': its face " << c.faceA - a.firstFace << " and face "
+      << c.faceB - b.firstFace << " of '" << b.name << "'";
+  }
+  s << " cross at (" << c.point.x << ", " << c.point.y << ", " << c.point.z << ")";
+  return Failure{c.bodyA, world.stepCount(), world.time(),
+                 describe(world, c.bodyA, s.str(),
+                          "The contact let it through: try a smaller dt or more substeps (--substeps), or a larger "
+                          "contact_thickness; if dt is sane, please report the scene.")};
+}
+
+// Step of Monitor::check: bodies through a collider mesh, still or moving: its contact stops
+// vertices, and an edge that passes through a triangle (or a triangle's edge through a face) is
+// caught here.
+std::optional<Failure> colliderCrossingFailure(const World& world) {
+  const Model& model = world.model();
+  if (model.colliders.meshes.empty()) return std::nullopt;
+  const std::vector<ColliderCrossing> crossing = findColliderCrossings(model, world.positions(), world.time(), 1);
+  if (crossing.empty()) return std::nullopt;
+  const ColliderCrossing& c = crossing[0];
+  const BodyInfo& a = model.bodies[c.body];
+  std::ostringstream s;
+  s << "it passes through collider '" << model.colliders.meshes[c.collider].name << "': its face "
+    << c.face - a.firstFace << " and the collider's triangle " << c.triangle << " cross at (" << c.point.x << ", "
+    << c.point.y << ", " << c.point.z << ")";
+  return Failure{c.body, world.stepCount(), world.time(),
+                 describe(world, c.body, s.str(),
+                          "The contact let it through: try a smaller dt or more substeps (--substeps), a larger "
+                          "contact_thickness, or a finer body mesh (a coarse one drapes over a collider's edges "
+                          "and corners with its faces, which only its vertices are kept off)")};
+}
+
 }  // namespace
 
 double landingStep(const World& world, uint32_t body, double tolerance) {
@@ -143,175 +226,120 @@ void Monitor::readAtOneInstant(const World& world, uint32_t body, BodyMeasures& 
   }
 }
 
-std::optional<Failure> Monitor::check(const World& world) {
-  const Model& model = world.model();
-  // First: a contact search that overflowed did not act, and the bodies' state explains why.
-  if (const BodyContacts* contacts = world.bodyContacts(); contacts && contacts->sinceStart().overflows > 0) {
-    const auto [a, b] = contacts->overflowPair();
+std::optional<Failure> Monitor::checkBody(const World& world, uint32_t b) {
+  BodyRecord& r = records_[b];
+  const BodyInfo& info = world.model().bodies[b];
+  BodyMeasures m = measureBody(world, b);
+  r.last = m;
+  auto fail = [&](const std::string& what, const std::string& advice) {
+    return Failure{b, world.stepCount(), world.time(), describe(world, b, what, advice)};
+  };
+  if (!m.finite) return fail("a position or velocity is NaN or infinite", stepAdvice(info));
+  if (m.size > limits_.sizeFactor * info.restSize) {
     std::ostringstream s;
-    s << "the contact search between it and " << (a == b ? "itself" : "body '" + model.bodies[b].name + "'")
-      << " found more than " << kMaxCandidatesPerPrimitive
-      << " candidate pairs per primitive (bodies that have blown up, or start inside each other)";
-    return Failure{a, world.stepCount(), world.time(), describe(world, a, s.str(), stepAdvice(model.bodies[a]))};
+    s << "it blew up to " << m.size / info.restSize << " times its rest size";
+    return fail(s.str(), stepAdvice(info));
   }
-  synchronized_ = Synchronized::NotYet;
-  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
-    BodyRecord& r = records_[b];
-    const BodyInfo& info = model.bodies[b];
-    BodyMeasures m = measureBody(world, b);
-    r.last = m;
-    auto fail = [&](const std::string& what, const std::string& advice) {
-      return Failure{b, world.stepCount(), world.time(), describe(world, b, what, advice)};
-    };
-    if (!m.finite) return fail("a position or velocity is NaN or infinite", stepAdvice(info));
-    if (m.size > limits_.sizeFactor * info.restSize) {
-      std::ostringstream s;
-      s << "it blew up to " << m.size / info.restSize << " times its rest size";
-      return fail(s.str(), stepAdvice(info));
-    }
-    // Nothing injects energy, so the total may only fall: a rise above the lowest total so far
-    // (not only above the start: a body that has lost most of its energy and gains it back at
-    // rest is as wrong) is an instability.
-    const bool touching = std::binary_search(touching_.begin(), touching_.end(), b);
-    // Counted from the lowest, the rise is measured against what the body had left to spend
-    // then, not what it had at the start: an instability that saturates (its pumping balanced by
-    // damping and drag) is no longer hidden under 2 % of the start's scale. Not for the
-    // symplectic methods, whose energy at a stable step swings by a multiple of a mode's
-    // (energySwings): a swing of what is left would read as a rise. From the start, against the
-    // start's.
-    const double reference = limits_.energyFromLowest ? r.lowestTotal : r.start.total();
-    const double allowed = limits_.energyTolerance * (lowestBased_ ? lowestAllowance(r.energyScale, r.lowestSpendable)
-                                                                    : r.energyScale);
-    const auto rose = [&] { return m.total() - reference > allowed; };
-    if (checkEnergy_ && !touching && rose()) readAtOneInstant(world, b, m);
-    if (checkEnergy_ && !touching && rose()) {
-      std::ostringstream s;
-      s << "its total energy rose from " << reference << " J";
-      if (limits_.energyFromLowest) s << " (its lowest, at t = " << r.lowestTotalTime << " s)";
-      s << " to " << m.total() << " J, more than " << allowed
-        << " J, although nothing injects energy (the integration is unstable or too coarse)";
-      return fail(s.str(), stepAdvice(info));
-    }
-    r.last = m;
-    if (m.total() < r.lowestTotal) {
-      r.lowestTotal = m.total(), r.lowestTotalTime = world.time();
-      r.lowestSpendable = spendable(info, b, m, 0.0);
-    }
-    if (m.penetration > limits_.penetration * info.restSize) {
-      std::ostringstream s;
-      s << "a vertex is " << m.penetration << " m behind a plane";
-      return fail(s.str(), "This is a bug in contact handling if dt is sane; please report the scene.");
-    }
-    r.maxStrain = std::max(r.maxStrain, m.maxStrain);
-    r.maxPenetration = std::max(r.maxPenetration, m.penetration);
-    if (info.restVolume > 0.0) {
-      const double ratio = m.volume / info.restVolume;
-      r.minVolumeRatio = std::min(r.minVolumeRatio, ratio);
-      r.maxVolumeRatio = std::max(r.maxVolumeRatio, ratio);
-      if (ratio < limits_.minVolume) {
-        std::ostringstream s;
-        s << "its volume fell to " << 100.0 * ratio << "% of rest, below the required " << 100.0 * limits_.minVolume
-          << "%";
-        Failure failure =
-            fail(s.str(), info.membraneModulus > 0.0
-                              ? "The body is too soft to keep its shape: try a shorter bend_period or stretch_period "
-                                "(`springy suggest --keep-volume` finds them), or a gas (volume_period)."
-                              : "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
-                                "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
-                                "strut_period, or the body material (scenes/README.md), which means the same at "
-                                "every resolution.");
-        if (ratio <= 0.0 && !info.selfContact) {
-          // Inside out: a crush folded it through itself, which its own contact would stop.
-          failure.message += " It turned inside out: with self_contact = true its own faces stop it folding through "
-                             "itself (docs/model.md section 19; it costs run time).";
-        }
-        failure.criterion = true;
-        return failure;
-      }
-    }
+  // Nothing injects energy, so the total may only fall: a rise above the lowest total so far
+  // (not only above the start: a body that has lost most of its energy and gains it back at
+  // rest is as wrong) is an instability.
+  const bool touching = std::binary_search(touching_.begin(), touching_.end(), b);
+  // Counted from the lowest, the rise is measured against what the body had left to spend
+  // then, not what it had at the start: an instability that saturates (its pumping balanced by
+  // damping and drag) is no longer hidden under 2 % of the start's scale. Not for the
+  // symplectic methods, whose energy at a stable step swings by a multiple of a mode's
+  // (energySwings): a swing of what is left would read as a rise. From the start, against the
+  // start's.
+  const double reference = limits_.energyFromLowest ? r.lowestTotal : r.start.total();
+  const double allowed = limits_.energyTolerance * (lowestBased_ ? lowestAllowance(r.energyScale, r.lowestSpendable)
+                                                                  : r.energyScale);
+  const auto rose = [&] { return m.total() - reference > allowed; };
+  if (checkEnergy_ && !touching && rose()) readAtOneInstant(world, b, m);
+  if (checkEnergy_ && !touching && rose()) {
+    std::ostringstream s;
+    s << "its total energy rose from " << reference << " J";
+    if (limits_.energyFromLowest) s << " (its lowest, at t = " << r.lowestTotalTime << " s)";
+    s << " to " << m.total() << " J, more than " << allowed
+      << " J, although nothing injects energy (the integration is unstable or too coarse)";
+    return fail(s.str(), stepAdvice(info));
   }
-  if (checkEnergy_ && !touching_.empty()) {
-    // The bodies in contact together: the one whose own energy rose most above its lowest is
-    // named (energy passes from body to body, but the sum may only fall).
-    double total = 0.0, start = 0.0, rise = -INFINITY;
-    uint32_t named = touching_[0];
-    for (uint32_t b : touching_) {
-      total += records_[b].last.total();
-      start += records_[b].start.total();
-      if (records_[b].last.total() - records_[b].lowestTotal > rise) {
-        rise = records_[b].last.total() - records_[b].lowestTotal;
-        named = b;
-      }
-    }
-    const double reference = limits_.energyFromLowest ? touchingLowest_ : start;
-    const double allowed = limits_.energyTolerance *
-                           (lowestBased_ ? lowestAllowance(touchingScale_, touchingSpendable_) : touchingScale_);
-    if (total - reference > allowed) {
-      // Read at one instant (symplectic Euler), the rise may go.
-      total = 0.0;
-      for (uint32_t b : touching_) {
-        readAtOneInstant(world, b, records_[b].last);
-        total += records_[b].last.total();
-      }
-    }
-    if (total - reference > allowed) {
-      std::ostringstream s;
-      s << "the total energy of the bodies in contact (";
-      for (std::size_t k = 0; k < touching_.size(); ++k)
-        s << (k ? ", " : "") << "'" << model.bodies[touching_[k]].name << "'";
-      s << ") rose from " << reference << " J";
-      if (limits_.energyFromLowest) s << " (its lowest, at t = " << touchingLowestTime_ << " s)";
-      s << " to " << total << " J, more than " << allowed
-        << " J, although nothing injects energy (the integration or the contact is unstable or too coarse)";
-      return Failure{named, world.stepCount(), world.time(),
-                     describe(world, named, s.str(), stepAdvice(model.bodies[named]))};
-    }
-    if (total < touchingLowest_) {
-      touchingLowest_ = total, touchingLowestTime_ = world.time();
-      touchingSpendable_ = 0.0;
-      for (uint32_t b : touching_) touchingSpendable_ += spendable(model.bodies[b], b, records_[b].last, 0.0);
-    }
+  r.last = m;
+  if (m.total() < r.lowestTotal) {
+    r.lowestTotal = m.total(), r.lowestTotalTime = world.time();
+    r.lowestSpendable = spendable(info, b, m, 0.0);
   }
-  // Bodies crossing each other or themselves: whatever the contact stage did, never a silent
-  // pass-through (sim/intersections.h).
-  if (world.bodyContacts() != nullptr) {
-    const std::vector<Intersection> crossing = findIntersections(model, world.positions(), 1);
-    if (!crossing.empty()) {
-      const Intersection& c = crossing[0];
-      const BodyInfo &a = model.bodies[c.bodyA], &b = model.bodies[c.bodyB];
-      std::ostringstream s;
-      if (c.bodyA == c.bodyB) {
-        s << "it passes through itself: its faces " << c.faceA - a.firstFace << " and " << c.faceB - a.firstFace;
-      } else {
-        s << "it passes through body '" << b.name << "': its face " << c.faceA - a.firstFace << " and face "
-          << c.faceB - b.firstFace << " of '" << b.name << "'";
-      }
-      s << " cross at (" << c.point.x << ", " << c.point.y << ", " << c.point.z << ")";
-      return Failure{c.bodyA, world.stepCount(), world.time(),
-                     describe(world, c.bodyA, s.str(),
-                              "The contact let it through: try a smaller dt or more substeps (--substeps), or a larger "
-                              "contact_thickness; if dt is sane, please report the scene.")};
-    }
+  if (m.penetration > limits_.penetration * info.restSize) {
+    std::ostringstream s;
+    s << "a vertex is " << m.penetration << " m behind a plane";
+    return fail(s.str(), "This is a bug in contact handling if dt is sane; please report the scene.");
   }
-  // Bodies through a collider mesh, still or moving: its contact stops vertices, and an edge
-  // that passes through a triangle (or a triangle's edge through a face) is caught here.
-  if (!model.colliders.meshes.empty()) {
-    const std::vector<ColliderCrossing> crossing = findColliderCrossings(model, world.positions(), world.time(), 1);
-    if (!crossing.empty()) {
-      const ColliderCrossing& c = crossing[0];
-      const BodyInfo& a = model.bodies[c.body];
-      std::ostringstream s;
-      s << "it passes through collider '" << model.colliders.meshes[c.collider].name << "': its face "
-        << c.face - a.firstFace << " and the collider's triangle " << c.triangle << " cross at (" << c.point.x
-        << ", " << c.point.y << ", " << c.point.z << ")";
-      return Failure{c.body, world.stepCount(), world.time(),
-                     describe(world, c.body, s.str(),
-                              "The contact let it through: try a smaller dt or more substeps (--substeps), a larger "
-                              "contact_thickness, or a finer body mesh (a coarse one drapes over a collider's edges "
-                              "and corners with its faces, which only its vertices are kept off)")};
-    }
+  r.maxStrain = std::max(r.maxStrain, m.maxStrain);
+  r.maxPenetration = std::max(r.maxPenetration, m.penetration);
+  if (info.restVolume > 0.0) {
+    const double ratio = m.volume / info.restVolume;
+    r.minVolumeRatio = std::min(r.minVolumeRatio, ratio);
+    r.maxVolumeRatio = std::max(r.maxVolumeRatio, ratio);
+    if (ratio < limits_.minVolume) return volumeFailure(world, b, ratio, limits_.minVolume);
   }
   return std::nullopt;
+}
+
+std::optional<Failure> Monitor::checkTouchingEnergy(const World& world) {
+  const Model& model = world.model();
+  // The bodies in contact together: the one whose own energy rose most above its lowest is
+  // named (energy passes from body to body, but the sum may only fall).
+  double total = 0.0, start = 0.0, rise = -INFINITY;
+  uint32_t named = touching_[0];
+  for (uint32_t b : touching_) {
+    total += records_[b].last.total();
+    start += records_[b].start.total();
+    if (records_[b].last.total() - records_[b].lowestTotal > rise) {
+      rise = records_[b].last.total() - records_[b].lowestTotal;
+      named = b;
+    }
+  }
+  const double reference = limits_.energyFromLowest ? touchingLowest_ : start;
+  const double allowed = limits_.energyTolerance *
+                         (lowestBased_ ? lowestAllowance(touchingScale_, touchingSpendable_) : touchingScale_);
+  if (total - reference > allowed) {
+    // Read at one instant (symplectic Euler), the rise may go.
+    total = 0.0;
+    for (uint32_t b : touching_) {
+      readAtOneInstant(world, b, records_[b].last);
+      total += records_[b].last.total();
+    }
+  }
+  if (total - reference > allowed) {
+    std::ostringstream s;
+    s << "the total energy of the bodies in contact (";
+    for (std::size_t k = 0; k < touching_.size(); ++k)
+      s << (k ? ", " : "") << "'" << model.bodies[touching_[k]].name << "'";
+    s << ") rose from " << reference << " J";
+    if (limits_.energyFromLowest) s << " (its lowest, at t = " << touchingLowestTime_ << " s)";
+    s << " to " << total << " J, more than " << allowed
+      << " J, although nothing injects energy (the integration or the contact is unstable or too coarse)";
+    return Failure{named, world.stepCount(), world.time(),
+                   describe(world, named, s.str(), stepAdvice(model.bodies[named]))};
+  }
+  if (total < touchingLowest_) {
+    touchingLowest_ = total, touchingLowestTime_ = world.time();
+    touchingSpendable_ = 0.0;
+    for (uint32_t b : touching_) touchingSpendable_ += spendable(model.bodies[b], b, records_[b].last, 0.0);
+  }
+  return std::nullopt;
+}
+
+std::optional<Failure> Monitor::check(const World& world) {
+  if (std::optional<Failure> failure = contactOverflowFailure(world)) return failure;
+  synchronized_ = Synchronized::NotYet;
+  for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
+    if (std::optional<Failure> failure = checkBody(world, b)) return failure;
+  }
+  if (checkEnergy_ && !touching_.empty()) {
+    if (std::optional<Failure> failure = checkTouchingEnergy(world)) return failure;
+  }
+  if (std::optional<Failure> failure = bodyCrossingFailure(world)) return failure;
+  return colliderCrossingFailure(world);
 }
 
 void RestWatch::add(const std::vector<Vec3>& x) {

@@ -109,6 +109,11 @@ class Monitor {
   // 1/(1 - omega h/2) where the method keeps it (World::synchronizedState). Only then, so that a
   // run that passes pays nothing for it; the confirmed energies replace the body's (m).
   void readAtOneInstant(const World& world, uint32_t body, BodyMeasures& m);
+  // Steps of check(). One body: finite, not blown up, its energy not risen (unless it touches
+  // others), not behind a plane, its volume above the limit; its record updated.
+  std::optional<Failure> checkBody(const World& world, uint32_t body);
+  // The bodies that touch each other: their energy summed, which nothing may raise.
+  std::optional<Failure> checkTouchingEnergy(const World& world);
   enum class Synchronized { NotYet, Yes, No };  // in this check
   Synchronized synchronized_ = Synchronized::NotYet;
   std::vector<Vec3> xSync_, vSync_;

@@ -24,8 +24,8 @@
 #include "scene/scene.h"
 #include "sim/error.h"
 #include "sim/limits.h"
-#include "sim/mesh_io.h"
-#include "sim/proxy.h"
+#include "mesh/mesh_io.h"
+#include "mesh/proxy.h"
 #include "sim/shapes.h"
 
 namespace springy {
@@ -243,7 +243,7 @@ TEST_F(BadInput, BadBodyValuesNameTheirKeyAndLine) {
 }
 
 // Issue 14: an open mesh is no longer refused: proxy = "auto" simulates it through a closed proxy
-// (sim/proxy.h) and says so; proxy = "none" keeps the strict validation and its located error.
+// (mesh/proxy.h) and says so; proxy = "none" keeps the strict validation and its located error.
 TEST_F(BadInput, AnOpenMeshIsSimulatedThroughAProxyUnlessProxyIsNone) {
   const std::string hole = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/meshes/cube_hole.obj";
   const SceneDesc desc = loadScene(scene("shape = \"mesh\"\nmesh = \"" + hole + "\"\nproxy_vertices = 300"));

@@ -17,7 +17,7 @@
 #include "scene/scene.h"
 #include "sim/diagnostics.h"
 #include "sim/intersections.h"
-#include "sim/mesh_io.h"
+#include "mesh/mesh_io.h"
 #include "sim/monitor.h"
 #include "sim/setup.h"
 #include "sim/shapes.h"

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "sim/embedding.h"
-#include "sim/proxy.h"
+#include "mesh/proxy.h"
 #include "sim/shapes.h"
 
 namespace springy {

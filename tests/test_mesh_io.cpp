@@ -1,4 +1,4 @@
-// Tests for mesh import, welding, validation, orientation and simplification (sim/mesh_io.h).
+// Tests for mesh import, welding, validation, orientation and simplification (mesh/mesh_io.h).
 #include <gtest/gtest.h>
 
 #include "error_of.h"
@@ -11,7 +11,7 @@
 #include <utility>
 
 #include "sim/error.h"
-#include "sim/mesh_io.h"
+#include "mesh/mesh_io.h"
 
 namespace springy {
 namespace {

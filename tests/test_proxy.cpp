@@ -1,4 +1,4 @@
-// Tests for the simulation proxy (sim/proxy.h): alpha wrapping + isotropic remeshing of bad
+// Tests for the simulation proxy (mesh/proxy.h): alpha wrapping + isotropic remeshing of bad
 // meshes into closed, outward, manifold, well-shaped bodies, and needsProxy's verdicts.
 #include <gtest/gtest.h>
 
@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "sim/error.h"
-#include "sim/mesh_io.h"
-#include "sim/proxy.h"
+#include "mesh/mesh_io.h"
+#include "mesh/proxy.h"
 #include "sim/shapes.h"
 
 namespace springy {

@@ -214,75 +214,90 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-}  // namespace
 
-int main(int argc, char** argv) {
-  const Options opt = parse(argc, argv);
-  constexpr double radius = 0.5, mass = 1.0, dropHeight = 1.5, gravity = 9.81;
+// The ball's vertices as Bullet takes them, placed so that its lowest vertex is dropHeight [m]
+// above the ground, and its triangles' corners.
+struct PlacedBall {
+  std::vector<btScalar> vertices;  // x, y, z per vertex
+  std::vector<int> indices;        // three per triangle
+  double minY = 0.0;               // [m] the lowest vertex, relative to the centre
+  double centerY = 0.0;            // [m] the centre's height
+};
 
-  // The ball, placed so that its lowest vertex is dropHeight above the ground.
-  const Mesh mesh = icosphere(radius, 4);
-  double minY = 0.0;
-  for (const auto& p : mesh.positions) minY = std::min(minY, p[1]);
-  const double centerY = dropHeight - minY;
-  std::vector<btScalar> vertices;
+PlacedBall placeBall(const Mesh& mesh, double dropHeight) {
+  PlacedBall ball;
+  for (const auto& p : mesh.positions) ball.minY = std::min(ball.minY, p[1]);
+  ball.centerY = dropHeight - ball.minY;
   for (const auto& p : mesh.positions) {
-    vertices.push_back(static_cast<btScalar>(p[0]));
-    vertices.push_back(static_cast<btScalar>(p[1] + centerY));
-    vertices.push_back(static_cast<btScalar>(p[2]));
+    ball.vertices.push_back(static_cast<btScalar>(p[0]));
+    ball.vertices.push_back(static_cast<btScalar>(p[1] + ball.centerY));
+    ball.vertices.push_back(static_cast<btScalar>(p[2]));
   }
-  std::vector<int> indices;
-  for (const auto& t : mesh.triangles) indices.insert(indices.end(), t.begin(), t.end());
-  const int nVertices = static_cast<int>(mesh.positions.size());
-  const int nTriangles = static_cast<int>(mesh.triangles.size());
+  for (const auto& t : mesh.triangles) ball.indices.insert(ball.indices.end(), t.begin(), t.end());
+  return ball;
+}
 
-  const auto setupStart = std::chrono::steady_clock::now();
-  // The world: rigid + soft, the usual Bullet set-up.
-  auto collisionConfig = std::make_unique<btSoftBodyRigidBodyCollisionConfiguration>();
-  auto dispatcher = std::make_unique<btCollisionDispatcher>(collisionConfig.get());
-  auto broadphase = std::make_unique<btDbvtBroadphase>();
-  auto solver = std::make_unique<btSequentialImpulseConstraintSolver>();
-  auto world = std::make_unique<btSoftRigidDynamicsWorld>(dispatcher.get(), broadphase.get(), solver.get(),
-                                                          collisionConfig.get());
+// The world: rigid + soft, the usual Bullet set-up, with a static ground, the plane y = 0.
+// Members are destroyed in reverse order: the ground first, the world before what it uses.
+struct BulletWorld {
+  std::unique_ptr<btSoftBodyRigidBodyCollisionConfiguration> collisionConfig;
+  std::unique_ptr<btCollisionDispatcher> dispatcher;
+  std::unique_ptr<btDbvtBroadphase> broadphase;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> solver;
+  std::unique_ptr<btSoftRigidDynamicsWorld> world;
+  std::unique_ptr<btStaticPlaneShape> groundShape;
+  std::unique_ptr<btRigidBody> ground;
+};
+
+void makeWorld(BulletWorld& w, double gravity) {
+  w.collisionConfig = std::make_unique<btSoftBodyRigidBodyCollisionConfiguration>();
+  w.dispatcher = std::make_unique<btCollisionDispatcher>(w.collisionConfig.get());
+  w.broadphase = std::make_unique<btDbvtBroadphase>();
+  w.solver = std::make_unique<btSequentialImpulseConstraintSolver>();
+  w.world = std::make_unique<btSoftRigidDynamicsWorld>(w.dispatcher.get(), w.broadphase.get(), w.solver.get(),
+                                                       w.collisionConfig.get());
   const btVector3 g(0, static_cast<btScalar>(-gravity), 0);
-  world->setGravity(g);
-  btSoftBodyWorldInfo& info = world->getWorldInfo();
+  w.world->setGravity(g);
+  btSoftBodyWorldInfo& info = w.world->getWorldInfo();
   info.m_gravity = g;
   info.air_density = 0;  // no aerodynamics (springy's scene has no drag either)
   info.m_sparsesdf.Initialize();
 
   // Static ground: the plane y = 0, friction 1 so the contact friction is the body's kDF.
-  auto groundShape = std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), 0);
-  groundShape->setMargin(0);  // contact at the plane itself (plus the body's margin)
-  btRigidBody::btRigidBodyConstructionInfo groundInfo(0, nullptr, groundShape.get());
+  w.groundShape = std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), 0);
+  w.groundShape->setMargin(0);  // contact at the plane itself (plus the body's margin)
+  btRigidBody::btRigidBodyConstructionInfo groundInfo(0, nullptr, w.groundShape.get());
   groundInfo.m_friction = 1;
-  auto ground = std::make_unique<btRigidBody>(groundInfo);
-  world->addRigidBody(ground.get());
+  w.ground = std::make_unique<btRigidBody>(groundInfo);
+  w.world->addRigidBody(w.ground.get());
+}
 
-  // The soft body: one link per mesh edge, plus bending links (Bullet's bending constraints
-  // are links between vertices `bending` edges apart).
-  btSoftBody* body = btSoftBodyHelpers::CreateFromTriMesh(info, vertices.data(), indices.data(), nTriangles,
-                                                          /*randomizeConstraints=*/false);
-  if (body->m_nodes.size() != nVertices) {
-    std::fprintf(stderr, "bullet_ball: expected %d nodes, Bullet made %d\n", nVertices, body->m_nodes.size());
-    return 2;
-  }
-  btSoftBody::Material* edges = body->m_materials[0];
+// The soft body's links: the mesh edges' and the bending links (Bullet's bending constraints are
+// links between vertices `bending` edges apart).
+struct LinkCounts {
+  int edges = 0, bending = 0;
+};
+
+// The soft body's materials and solver settings from the options: kLST of the edge and bending
+// links, Bullet's bending constraints (or the same links by breadth-first search), pressure,
+// damping and friction; no volume conservation or pose matching.
+LinkCounts configureBody(btSoftBody& body, const Options& opt, double mass) {
+  LinkCounts links;
+  btSoftBody::Material* edges = body.m_materials[0];
   edges->m_kLST = static_cast<btScalar>(opt.klst);
   edges->m_kAST = 1;
   edges->m_kVST = 1;
-  const int edgeLinks = body->m_links.size();
-  int bendLinks = 0;
+  links.edges = body.m_links.size();
   if (opt.bending > 0) {
-    btSoftBody::Material* bend = body->appendMaterial();
+    btSoftBody::Material* bend = body.appendMaterial();
     bend->m_kLST = static_cast<btScalar>(opt.bendKlst);
     bend->m_kAST = 1;
     bend->m_kVST = 1;
-    bendLinks = opt.bulletBending ? body->generateBendingConstraints(opt.bending, bend)
-                                  : appendBendingLinks(*body, opt.bending, bend);
+    links.bending = opt.bulletBending ? body.generateBendingConstraints(opt.bending, bend)
+                                      : appendBendingLinks(body, opt.bending, bend);
   }
-  body->randomizeConstraints();  // Bullet's recommended Gauss-Seidel ordering
-  btSoftBody::Config& cfg = body->m_cfg;
+  body.randomizeConstraints();  // Bullet's recommended Gauss-Seidel ordering
+  btSoftBody::Config& cfg = body.m_cfg;
   cfg.piterations = opt.piterations;
   cfg.viterations = 0;
   cfg.diterations = 0;
@@ -294,9 +309,120 @@ int main(int argc, char** argv) {
   cfg.kDG = 0;
   cfg.kLF = 0;
   cfg.collisions = btSoftBody::fCollision::SDF_RS;  // vertices against rigid shapes (the default)
-  body->getCollisionShape()->setMargin(static_cast<btScalar>(opt.margin));
-  body->setTotalMass(static_cast<btScalar>(mass), /*fromfaces=*/true);  // mass by area, as springy
-  world->addSoftBody(body);
+  body.getCollisionShape()->setMargin(static_cast<btScalar>(opt.margin));
+  body.setTotalMass(static_cast<btScalar>(mass), /*fromfaces=*/true);  // mass by area, as springy
+  return links;
+}
+
+// What the run measured, step by step, and how it ended.
+struct RunRecord {
+  double maxStrain = 0.0;  // largest |l - l0| / l0 of a mesh edge over the run (springy check's "max strain")
+  double minRatio = 1.0, maxRatio = 1.0, ratio = 1.0;  // volume over rest volume: least, most, last
+  double lowest = 0.0, endLowest = 0.0;                // [m] the lowest vertex's height: least, last
+  double stepSeconds = 0.0;                            // [s] in stepSimulation
+  double wall = 0.0;                                   // [s] of wall time in the simulation loop
+  // The bounce: the centre's highest point (the bounding box's, at hand) from t = 0.7 s on, when
+  // the ball, which lands at 0.55 s, has left the ground again (or not): the first bounce's apex.
+  double apex = -std::numeric_limits<double>::infinity();
+  long failedStep = -1;
+  std::string failure;
+};
+
+// The largest strain of a mesh edge's link now (randomizeConstraints shuffled the links, so the
+// bending links are skipped by their flag).
+double largestEdgeStrain(const btSoftBody& body) {
+  double strain = 0.0;
+  for (int k = 0; k < body.m_links.size(); ++k) {
+    const btSoftBody::Link& link = body.m_links[k];
+    if (link.m_bbending) continue;
+    const double l = static_cast<double>((link.m_n[1]->m_x - link.m_n[0]->m_x).length());
+    strain = std::max(strain, std::fabs(l - static_cast<double>(link.m_rl)) / static_cast<double>(link.m_rl));
+  }
+  return strain;
+}
+
+// Measures the state after step s (time s dt [s]) into the record; the failure it shows, if any
+// (not finite, the volume ratio below the limit, sunk into the ground, grown past 10x its size).
+void measureStep(const btSoftBody& body, const Mesh& mesh, double restVolume, const Options& opt, double radius,
+                 long s, btScalar dt, RunRecord& run) {
+  run.ratio = enclosedVolume(body, mesh.triangles) / restVolume;
+  run.maxStrain = std::max(run.maxStrain, largestEdgeStrain(body));
+  run.minRatio = std::min(run.minRatio, run.ratio);
+  run.maxRatio = std::max(run.maxRatio, run.ratio);
+  btVector3 lo = body.m_nodes[0].m_x, hi = lo;
+  bool finite = std::isfinite(run.ratio);
+  for (int i = 0; i < body.m_nodes.size(); ++i) {
+    const btVector3& x = body.m_nodes[i].m_x;
+    finite = finite && std::isfinite(x.x()) && std::isfinite(x.y()) && std::isfinite(x.z());
+    lo.setMin(x);
+    hi.setMax(x);
+  }
+  run.endLowest = static_cast<double>(lo.y());
+  run.lowest = std::min(run.lowest, run.endLowest);
+  if (static_cast<double>(s) * dt >= 0.7) run.apex = std::max(run.apex, 0.5 * static_cast<double>(lo.y() + hi.y()));
+  if (!finite) {
+    run.failure = "a position or the volume is not finite";
+  } else if (run.ratio < opt.minVolume) {
+    run.failure = "volume ratio " + std::to_string(run.ratio) + " below " + std::to_string(opt.minVolume);
+  } else if (lo.y() < -opt.maxPenetration) {
+    run.failure = "sank into the ground (lowest vertex y = " + std::to_string(lo.y()) + " m)";
+  } else if ((hi - lo).length() > 10.0 * 2.0 * radius * std::sqrt(3.0)) {
+    run.failure = "grew past 10x its size";
+  }
+}
+
+// The simulation loop: `steps` steps of dt [s], each measured, until the first failure. The
+// lowest vertex starts at the centre's height `centerY` [m] (any vertex is lower).
+RunRecord simulate(btSoftRigidDynamicsWorld& world, const btSoftBody& body, const Mesh& mesh, double restVolume,
+                   const Options& opt, double radius, long steps, btScalar dt, double centerY) {
+  RunRecord run;
+  run.lowest = run.endLowest = centerY;
+  const auto loopStart = std::chrono::steady_clock::now();
+  for (long s = 1; s <= steps; ++s) {
+    const auto t0 = std::chrono::steady_clock::now();
+    world.stepSimulation(dt, 0);  // maxSubSteps 0: exactly one step of dt
+    run.stepSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    measureStep(body, mesh, restVolume, opt, radius, s, dt, run);
+    if (!run.failure.empty()) {
+      run.failedStep = s;
+      break;
+    }
+  }
+  run.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - loopStart).count();
+  return run;
+}
+
+btVector3 centroidOf(const btSoftBody& body) {
+  btVector3 centroid(0, 0, 0);
+  for (int i = 0; i < body.m_nodes.size(); ++i) centroid += body.m_nodes[i].m_x;
+  centroid /= static_cast<btScalar>(body.m_nodes.size());
+  return centroid;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Options opt = parse(argc, argv);
+  constexpr double radius = 0.5, mass = 1.0, dropHeight = 1.5, gravity = 9.81;
+
+  // The ball, placed so that its lowest vertex is dropHeight above the ground.
+  const Mesh mesh = icosphere(radius, 4);
+  PlacedBall ball = placeBall(mesh, dropHeight);
+  const int nVertices = static_cast<int>(mesh.positions.size());
+  const int nTriangles = static_cast<int>(mesh.triangles.size());
+
+  const auto setupStart = std::chrono::steady_clock::now();
+  BulletWorld w;
+  makeWorld(w, gravity);
+  btSoftBody* body = btSoftBodyHelpers::CreateFromTriMesh(w.world->getWorldInfo(), ball.vertices.data(),
+                                                          ball.indices.data(), nTriangles,
+                                                          /*randomizeConstraints=*/false);
+  if (body->m_nodes.size() != nVertices) {
+    std::fprintf(stderr, "bullet_ball: expected %d nodes, Bullet made %d\n", nVertices, body->m_nodes.size());
+    return 2;
+  }
+  const LinkCounts links = configureBody(*body, opt, mass);
+  w.world->addSoftBody(body);
 
   const double restVolume = enclosedVolume(*body, mesh.triangles);
   const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - setupStart).count();
@@ -305,84 +431,46 @@ int main(int argc, char** argv) {
   if (!opt.quiet) {
     std::printf("bullet_ball: Bullet %d, btScalar %zu bytes; icosphere %d vertices, %d triangles, %d edge links + %d "
                 "bending links (distance %d)\n",
-                btGetVersion(), sizeof(btScalar), nVertices, nTriangles, edgeLinks, bendLinks, opt.bending);
+                btGetVersion(), sizeof(btScalar), nVertices, nTriangles, links.edges, links.bending, opt.bending);
     std::printf("  dt %g s, %ld steps, piterations %d, kLST %g, bending kLST %g, kDP %g, kPR %g, kDF %g, margin %g m, "
                 "rest volume %.6f m^3 (sphere %.6f)\n",
                 opt.dt, steps, opt.piterations, opt.klst, opt.bendKlst, opt.kdp, opt.kpr, opt.kdf, opt.margin, restVolume,
                 4.0 / 3.0 * M_PI * radius * radius * radius);
-    std::printf("  centre at y = %.6f m (lowest vertex %.6f m below it); setup %.3f s (not timed below)\n", centerY,
-                -minY, setupSeconds);
+    std::printf("  centre at y = %.6f m (lowest vertex %.6f m below it); setup %.3f s (not timed below)\n",
+                ball.centerY, -ball.minY, setupSeconds);
   }
 
-  double maxStrain = 0.0;  // largest |l - l0| / l0 of a mesh edge over the run (springy check's "max strain")
-  double minRatio = 1.0, maxRatio = 1.0, ratio = 1.0, lowest = centerY, endLowest = centerY, stepSeconds = 0.0;
-  long failedStep = -1;
-  std::string failure;
-  // The bounce: the centre's highest point (the bounding box's, at hand) from t = 0.7 s on, when
-  // the ball, which lands at 0.55 s, has left the ground again (or not): the first bounce's apex.
-  double apex = -std::numeric_limits<double>::infinity();
-  const auto loopStart = std::chrono::steady_clock::now();
-  for (long s = 1; s <= steps; ++s) {
-    const auto t0 = std::chrono::steady_clock::now();
-    world->stepSimulation(dt, 0);  // maxSubSteps 0: exactly one step of dt
-    stepSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    ratio = enclosedVolume(*body, mesh.triangles) / restVolume;
-    for (int k = 0; k < body->m_links.size(); ++k) {
-      const btSoftBody::Link& link = body->m_links[k];
-      if (link.m_bbending) continue;  // the mesh edges only (randomizeConstraints shuffled the links)
-      const double l = static_cast<double>((link.m_n[1]->m_x - link.m_n[0]->m_x).length());
-      maxStrain = std::max(maxStrain, std::fabs(l - static_cast<double>(link.m_rl)) / static_cast<double>(link.m_rl));
-    }
-    minRatio = std::min(minRatio, ratio);
-    maxRatio = std::max(maxRatio, ratio);
-    btVector3 lo = body->m_nodes[0].m_x, hi = lo;
-    bool finite = std::isfinite(ratio);
-    for (int i = 0; i < body->m_nodes.size(); ++i) {
-      const btVector3& x = body->m_nodes[i].m_x;
-      finite = finite && std::isfinite(x.x()) && std::isfinite(x.y()) && std::isfinite(x.z());
-      lo.setMin(x);
-      hi.setMax(x);
-    }
-    endLowest = static_cast<double>(lo.y());
-    lowest = std::min(lowest, endLowest);
-    if (static_cast<double>(s) * dt >= 0.7) apex = std::max(apex, 0.5 * static_cast<double>(lo.y() + hi.y()));
-    if (!finite) failure = "a position or the volume is not finite";
-    else if (ratio < opt.minVolume) failure = "volume ratio " + std::to_string(ratio) + " below " + std::to_string(opt.minVolume);
-    else if (lo.y() < -opt.maxPenetration) failure = "sank into the ground (lowest vertex y = " + std::to_string(lo.y()) + " m)";
-    else if ((hi - lo).length() > 10.0 * 2.0 * radius * std::sqrt(3.0)) failure = "grew past 10x its size";
-    if (!failure.empty()) {
-      failedStep = s;
-      break;
-    }
-  }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - loopStart).count();
-  const long done = failedStep > 0 ? failedStep : steps;
+  const RunRecord run = simulate(*w.world, *body, mesh, restVolume, opt, radius, steps, dt, ball.centerY);
+  const double wall = run.wall;
+  const long done = run.failedStep > 0 ? run.failedStep : steps;
   const double nsPerVertexStep = 1e9 * wall / (static_cast<double>(done) * nVertices);
-  btVector3 centroid(0, 0, 0);
-  for (int i = 0; i < body->m_nodes.size(); ++i) centroid += body->m_nodes[i].m_x;
-  centroid /= static_cast<btScalar>(body->m_nodes.size());
+  const btVector3 centroid = centroidOf(*body);
 
   if (!opt.quiet) {
     std::printf("  %ld steps in %.3f s of wall time (%.3f s in stepSimulation), %.0f ns per vertex per step\n", done,
-                wall, stepSeconds, nsPerVertexStep);
-    std::printf("  max edge strain %.4f\n", maxStrain);
-    std::printf("  first bounce: the centre's highest point after t = 0.7 s %.4f m\n", apex);
+                wall, run.stepSeconds, nsPerVertexStep);
+    std::printf("  max edge strain %.4f\n", run.maxStrain);
+    std::printf("  first bounce: the centre's highest point after t = 0.7 s %.4f m\n", run.apex);
     std::printf("  volume: min %.4f, max %.4f, end %.4f of rest; lowest vertex %.4f m (at the end %.4f m); end "
                 "centroid y %.4f m\n",
-                minRatio, maxRatio, ratio, lowest, endLowest, static_cast<double>(centroid.y()));
-    if (failedStep > 0) std::printf("  FAILED at step %ld (t = %.4f s): %s\n", failedStep, static_cast<double>(failedStep) * opt.dt, failure.c_str());
-    else std::printf("  ok\n");
+                run.minRatio, run.maxRatio, run.ratio, run.lowest, run.endLowest, static_cast<double>(centroid.y()));
+    if (run.failedStep > 0) {
+      std::printf("  FAILED at step %ld (t = %.4f s): %s\n", run.failedStep,
+                  static_cast<double>(run.failedStep) * opt.dt, run.failure.c_str());
+    } else {
+      std::printf("  ok\n");
+    }
   }
   std::printf(
       "result dt=%.9g piterations=%d steps=%ld vertices=%d min_volume=%.6f end_volume=%.6f max_volume=%.6f "
       "wall_s=%.6f step_s=%.6f ns_per_vertex_step=%.1f lowest_y=%.6f end_lowest_y=%.6f end_centroid_y=%.6f links=%d "
       "setup_s=%.3f max_strain=%.6f kpr=%g apex_y=%.6f status=%s\n",
-      opt.dt, opt.piterations, done, nVertices, minRatio, ratio, maxRatio, wall, stepSeconds, nsPerVertexStep, lowest,
-      endLowest, static_cast<double>(centroid.y()), edgeLinks + bendLinks, setupSeconds, maxStrain, opt.kpr, apex,
-      failedStep > 0 ? "fail" : "ok");
+      opt.dt, opt.piterations, done, nVertices, run.minRatio, run.ratio, run.maxRatio, wall, run.stepSeconds,
+      nsPerVertexStep, run.lowest, run.endLowest, static_cast<double>(centroid.y()), links.edges + links.bending,
+      setupSeconds, run.maxStrain, opt.kpr, run.apex, run.failedStep > 0 ? "fail" : "ok");
 
-  world->removeSoftBody(body);
+  w.world->removeSoftBody(body);
   delete body;
-  world->removeRigidBody(ground.get());
-  return failedStep > 0 ? 1 : 0;
+  w.world->removeRigidBody(w.ground.get());
+  return run.failedStep > 0 ? 1 : 0;
 }

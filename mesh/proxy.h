@@ -1,6 +1,6 @@
 // springy: a simulation proxy, for meshes that cannot or should not be simulated as they are.
 //
-// A soft body must be one closed, outward-oriented 2-manifold (sim/mesh_io.h), and it simulates
+// A soft body must be one closed, outward-oriented 2-manifold (mesh/mesh_io.h), and it simulates
 // best with near-equilateral triangles of even size: a sliver's hinge is ill-conditioned, and
 // high-valence poles and uneven edges spread mass and stiffness unevenly. A user's mesh that is
 // open, in pieces, non-manifold, self-intersecting, badly shaped or far finer than needed can
@@ -12,7 +12,7 @@
 // intersection-free surface strictly outside the input, then isotropic remeshing
 // (CGAL::Polygon_mesh_processing::isotropic_remeshing) makes its triangles near-equilateral at
 // the target edge length. CGAL's Alpha_wrap_3 and Polygon_mesh_processing packages are
-// GPL-3.0-or-later (see LICENSE). All CGAL code lives in sim/proxy.cpp.
+// GPL-3.0-or-later (see LICENSE). All CGAL code lives in mesh/proxy.cpp.
 #pragma once
 
 #include <cstddef>

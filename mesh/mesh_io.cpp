@@ -1,4 +1,4 @@
-#include "sim/mesh_io.h"
+#include "mesh/mesh_io.h"
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -159,89 +159,122 @@ struct HalfEdge {
   uint32_t triangle;
 };
 
-// A PLY header declares its element counts up front, and assimp allocates for them before it
-// reads the body: a 200-byte file claiming 2e9 vertices took all memory. Each element needs at
-// least a known number of bytes (binary: the sizes of its scalar properties and list counts;
-// ASCII: a digit and a separator per property), so the counts the file can hold follow from
-// its size. Returns nothing to say for a file that is not PLY or whose header assimp will
-// reject anyway.
-void checkPlyCounts(const std::string& path, std::uintmax_t fileSize) {
-  std::ifstream in(path, std::ios::binary);
-  std::string line;
-  // assimp takes the magic in any case ("pLy": found by the fuzzer, then a header without its
-  // end hung the reader); so does this check.
-  const auto isMagic = [](const std::string& first) {
-    return first.size() >= 3 && std::tolower(static_cast<unsigned char>(first[0])) == 'p' &&
-           std::tolower(static_cast<unsigned char>(first[1])) == 'l' &&
-           std::tolower(static_cast<unsigned char>(first[2])) == 'y';
-  };
-  if (!std::getline(in, line) || !isMagic(line)) return;
-  bool ascii = true;
-  std::uintmax_t needed = 0;  // bytes the declared elements need at the least
-  std::uint64_t elements = 0;  // all elements declared: ASCII has one line each
-  std::string element;
-  std::uint64_t count = 0, elementBytes = 0;
-  auto closeElement = [&] {
-    if (element.empty()) return;
-    const std::uint64_t limit = element == "face" ? kMaxMeshTriangles : kMaxMeshVertices;
-    if (count > limit) {
-      throw Error(path + ": the PLY header declares " + std::to_string(count) + " " + element +
-                  " elements, more than the limit of " + std::to_string(limit));
-    }
-    needed += count * std::max<std::uint64_t>(elementBytes, 1);
-    elements += count;
-  };
-  auto typeBytes = [](const std::string& type) -> std::uint64_t {
-    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-    if (type == "double" || type == "float64") return 8;
-    return 4;
-  };
-  std::uintmax_t headerBytes = line.size() + 1;
-  for (int headerLines = 0; headerLines < 10000 && std::getline(in, line); ++headerLines) {
-    headerBytes += line.size() + 1;
+// assimp takes the PLY magic in any case ("pLy": found by the fuzzer, then a header without its
+// end hung the reader); so does checkPlyCounts.
+bool isPlyMagic(const std::string& first) {
+  return first.size() >= 3 && std::tolower(static_cast<unsigned char>(first[0])) == 'p' &&
+         std::tolower(static_cast<unsigned char>(first[1])) == 'l' &&
+         std::tolower(static_cast<unsigned char>(first[2])) == 'y';
+}
+
+// The bytes one binary PLY scalar of this type takes.
+std::uint64_t plyTypeBytes(const std::string& type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "double" || type == "float64") return 8;
+  return 4;
+}
+
+// What a PLY header declares, line by line: its format, and per element the count and the least
+// bytes one takes (binary: the sizes of its scalar properties and list counts; ASCII: a digit
+// and a separator per property), summed into the least bytes its body needs.
+class PlyHeader {
+ public:
+  explicit PlyHeader(const std::string& path) : path_(path) {}
+
+  // Reads one header line after the magic; true at end_header, when every count is summed.
+  bool read(const std::string& line) {
     std::istringstream words(line);
     std::string keyword;
     words >> keyword;
     if (keyword == "format") {
       std::string format;
       words >> format;
-      ascii = format == "ascii";
+      ascii_ = format == "ascii";
     } else if (keyword == "element") {
       closeElement();
-      words >> element >> count;
-      if (!words) throw Error(path + ": the PLY header's line '" + line + "' is not 'element NAME COUNT'");
-      elementBytes = 0;
-    } else if (keyword == "property" && !element.empty()) {
+      words >> element_ >> count_;
+      if (!words) throw Error(path_ + ": the PLY header's line '" + line + "' is not 'element NAME COUNT'");
+      elementBytes_ = 0;
+    } else if (keyword == "property" && !element_.empty()) {
       std::string type;
       words >> type;
       if (type == "list") {
         std::string countType;
         words >> countType;
-        elementBytes += ascii ? 2 : typeBytes(countType);
+        elementBytes_ += ascii_ ? 2 : plyTypeBytes(countType);
       } else {
-        elementBytes += ascii ? 2 : typeBytes(type);
+        elementBytes_ += ascii_ ? 2 : plyTypeBytes(type);
       }
     } else if (keyword == "end_header") {
       closeElement();
-      const std::uintmax_t body = fileSize > headerBytes ? fileSize - headerBytes : 0;
-      // ASCII: the last value of the file may lack its separator.
-      if (needed > body + 1) {
-        throw Error(path + ": the PLY header declares elements that need at least " + std::to_string(needed) +
-                    " bytes, but the file has only " + std::to_string(body) +
-                    " after its header: the file is truncated or its header is wrong");
-      }
-      if (ascii) {
-        // assimp's ASCII reader fills elements missing at a cut with zeros; count the lines.
-        std::uint64_t lines = 0;
-        while (lines < elements && std::getline(in, line)) {
-          if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
-        }
-        if (lines < elements) {
-          throw Error(path + ": the PLY header declares " + std::to_string(elements) + " elements (one line each), but " +
-                      "the file has only " + std::to_string(lines) + " lines after its header: the file is truncated");
-        }
-      }
+      return true;
+    }
+    return false;
+  }
+
+  bool ascii() const { return ascii_; }
+  std::uintmax_t needed() const { return needed_; }
+  std::uint64_t elements() const { return elements_; }
+
+ private:
+  // Adds the element declared last to the sums; a count past the mesh limits is refused.
+  void closeElement() {
+    if (element_.empty()) return;
+    const std::uint64_t limit = element_ == "face" ? kMaxMeshTriangles : kMaxMeshVertices;
+    if (count_ > limit) {
+      throw Error(path_ + ": the PLY header declares " + std::to_string(count_) + " " + element_ +
+                  " elements, more than the limit of " + std::to_string(limit));
+    }
+    needed_ += count_ * std::max<std::uint64_t>(elementBytes_, 1);
+    elements_ += count_;
+  }
+
+  const std::string& path_;
+  bool ascii_ = true;
+  std::uintmax_t needed_ = 0;   // bytes the declared elements need at the least
+  std::uint64_t elements_ = 0;  // all elements declared: ASCII has one line each
+  std::string element_;         // the element declared last, its count and the least bytes of one
+  std::uint64_t count_ = 0, elementBytes_ = 0;
+};
+
+// Step of checkPlyCounts, after the header: the body (`body` bytes, `in` at its start) must be
+// large enough for what the header declares, and an ASCII body have a line per element.
+void checkPlyBody(const std::string& path, const PlyHeader& header, std::uintmax_t body, std::ifstream& in) {
+  // ASCII: the last value of the file may lack its separator.
+  if (header.needed() > body + 1) {
+    throw Error(path + ": the PLY header declares elements that need at least " + std::to_string(header.needed()) +
+                " bytes, but the file has only " + std::to_string(body) +
+                " after its header: the file is truncated or its header is wrong");
+  }
+  if (!header.ascii()) return;
+  // assimp's ASCII reader fills elements missing at a cut with zeros; count the lines.
+  std::uint64_t lines = 0;
+  std::string line;
+  while (lines < header.elements() && std::getline(in, line)) {
+    if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
+  }
+  if (lines < header.elements()) {
+    throw Error(path + ": the PLY header declares " + std::to_string(header.elements()) +
+                " elements (one line each), but " + "the file has only " + std::to_string(lines) +
+                " lines after its header: the file is truncated");
+  }
+}
+
+// A PLY header declares its element counts up front, and assimp allocates for them before it
+// reads the body: a 200-byte file claiming 2e9 vertices took all memory. Each element needs at
+// least a known number of bytes, so the counts the file can hold follow from its size. Returns
+// nothing to say for a file that is not PLY or whose header assimp will reject anyway.
+void checkPlyCounts(const std::string& path, std::uintmax_t fileSize) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || !isPlyMagic(line)) return;
+  PlyHeader header(path);
+  std::uintmax_t headerBytes = line.size() + 1;
+  for (int headerLines = 0; headerLines < 10000 && std::getline(in, line); ++headerLines) {
+    headerBytes += line.size() + 1;
+    if (header.read(line)) {
+      checkPlyBody(path, header, fileSize > headerBytes ? fileSize - headerBytes : 0, in);
       return;
     }
   }
@@ -485,68 +518,76 @@ TriMesh readMeshFile(const std::string& path) {
               ", or out of memory): the file is corrupt or not a mesh assimp reads");
 }
 
-TriMesh weldVertices(const TriMesh& mesh, double tolerance) {
-  const std::size_t n = mesh.positions.size();
-  MinUnionFind sets(n);
+namespace {
 
-  if (tolerance > 0.0) {
-    // Uniform grid with cell size = tolerance: any two vertices within tolerance lie in the same
-    // or adjacent cells. The cells are a sorted array (not a hash map) so that nothing depends on
-    // iteration order; the distance test below decides, the cells only prune.
-    using Cell = std::array<int64_t, 3>;
-    constexpr double kCellLimit = 4.0e18;  // keeps the cast in int64 range; clamped cells merge
-    auto cellOf = [&](const Vec3& p) {
-      Cell c{};
-      for (int k = 0; k < 3; ++k) {
-        const double q = std::clamp(std::floor(p[k] / tolerance), -kCellLimit, kCellLimit);
-        c[static_cast<std::size_t>(k)] = static_cast<int64_t>(q);
-      }
-      return c;
-    };
-    std::vector<std::pair<Cell, uint32_t>> sorted;
-    sorted.reserve(n);
-    for (uint32_t i = 0; i < n; ++i) {
-      // Non-finite vertices stay on their own; validation reports them.
-      if (isFinite(mesh.positions[i])) sorted.emplace_back(cellOf(mesh.positions[i]), i);
+// Step of weldVertices: unites every two finite vertices within `tolerance` [mesh units]. A
+// uniform grid with cell size = tolerance: any two vertices within tolerance lie in the same or
+// adjacent cells. The cells are a sorted array (not a hash map) so that nothing depends on
+// iteration order; the distance test decides, the cells only prune.
+void uniteNearVertices(const TriMesh& mesh, double tolerance, MinUnionFind& sets) {
+  const std::size_t n = mesh.positions.size();
+  using Cell = std::array<int64_t, 3>;
+  constexpr double kCellLimit = 4.0e18;  // keeps the cast in int64 range; clamped cells merge
+  auto cellOf = [&](const Vec3& p) {
+    Cell c{};
+    for (int k = 0; k < 3; ++k) {
+      const double q = std::clamp(std::floor(p[k] / tolerance), -kCellLimit, kCellLimit);
+      c[static_cast<std::size_t>(k)] = static_cast<int64_t>(q);
     }
-    std::sort(sorted.begin(), sorted.end());
-    const double tol2 = tolerance * tolerance;
-    for (const auto& [cell, i] : sorted) {
-      for (int64_t dx = -1; dx <= 1; ++dx) {
-        for (int64_t dy = -1; dy <= 1; ++dy) {
-          for (int64_t dz = -1; dz <= 1; ++dz) {
-            const Cell key{cell[0] + dx, cell[1] + dy, cell[2] + dz};
-            auto it = std::lower_bound(sorted.begin(), sorted.end(), key,
-                                       [](const auto& e, const Cell& k) { return e.first < k; });
-            for (; it != sorted.end() && it->first == key; ++it) {
-              const uint32_t j = it->second;
-              if (j > i && lengthSquared(mesh.positions[j] - mesh.positions[i]) <= tol2) {
-                sets.unite(i, j);
-              }
+    return c;
+  };
+  std::vector<std::pair<Cell, uint32_t>> sorted;
+  sorted.reserve(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    // Non-finite vertices stay on their own; validation reports them.
+    if (isFinite(mesh.positions[i])) sorted.emplace_back(cellOf(mesh.positions[i]), i);
+  }
+  std::sort(sorted.begin(), sorted.end());
+  const double tol2 = tolerance * tolerance;
+  for (const auto& [cell, i] : sorted) {
+    for (int64_t dx = -1; dx <= 1; ++dx) {
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        for (int64_t dz = -1; dz <= 1; ++dz) {
+          const Cell key{cell[0] + dx, cell[1] + dy, cell[2] + dz};
+          auto it = std::lower_bound(sorted.begin(), sorted.end(), key,
+                                     [](const auto& e, const Cell& k) { return e.first < k; });
+          for (; it != sorted.end() && it->first == key; ++it) {
+            const uint32_t j = it->second;
+            if (j > i && lengthSquared(mesh.positions[j] - mesh.positions[i]) <= tol2) {
+              sets.unite(i, j);
             }
           }
         }
       }
     }
-  } else {
-    // Zero tolerance: merge exactly equal positions only.
-    std::vector<uint32_t> order;
-    order.reserve(n);
-    for (uint32_t i = 0; i < n; ++i) {
-      if (isFinite(mesh.positions[i])) order.push_back(i);
-    }
-    auto key = [&](uint32_t i) {
-      const Vec3& p = mesh.positions[i];
-      return std::tuple(p.x, p.y, p.z, i);
-    };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
-    for (std::size_t k = 1; k < order.size(); ++k) {
-      if (mesh.positions[order[k]] == mesh.positions[order[k - 1]])
-        sets.unite(order[k - 1], order[k]);
-    }
   }
+}
 
-  // Remap corners to set representatives (the smallest original index), drop collapsed triangles.
+// Step of weldVertices at zero tolerance: unites exactly equal positions only.
+void uniteEqualVertices(const TriMesh& mesh, MinUnionFind& sets) {
+  const std::size_t n = mesh.positions.size();
+  std::vector<uint32_t> order;
+  order.reserve(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    if (isFinite(mesh.positions[i])) order.push_back(i);
+  }
+  auto key = [&](uint32_t i) {
+    const Vec3& p = mesh.positions[i];
+    return std::tuple(p.x, p.y, p.z, i);
+  };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    if (mesh.positions[order[k]] == mesh.positions[order[k - 1]])
+      sets.unite(order[k - 1], order[k]);
+  }
+}
+
+// Step of weldVertices: the mesh on the sets' representatives. Corners are remapped to them (the
+// smallest original index) and collapsed triangles dropped; the vertices left are renumbered in
+// increasing original index, so an already welded mesh comes back unchanged. A merged vertex
+// keeps its representative's position exactly rather than an average.
+TriMesh weldedMesh(const TriMesh& mesh, MinUnionFind& sets) {
+  const std::size_t n = mesh.positions.size();
   std::vector<Triangle> triangles;
   triangles.reserve(mesh.triangles.size());
   std::vector<bool> used(n, false);
@@ -556,9 +597,6 @@ TriMesh weldVertices(const TriMesh& mesh, double tolerance) {
     triangles.push_back(r);
     for (uint32_t v : r) used[v] = true;
   }
-
-  // New vertices in increasing original index: an already welded mesh comes back unchanged. The
-  // merged vertex keeps its representative's position exactly rather than an average.
   TriMesh out;
   std::vector<uint32_t> newIndex(n, 0);
   for (uint32_t i = 0; i < n; ++i) {
@@ -573,14 +611,13 @@ TriMesh weldVertices(const TriMesh& mesh, double tolerance) {
   return out;
 }
 
-std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surface) {
+// Step of findManifoldProblem: the cheap per-element checks, first so that later checks can index
+// and measure safely: finite coordinates, corners that exist, no zero-area triangle, no unused
+// vertex.
+std::optional<std::string> elementProblem(const TriMesh& mesh) {
   const std::vector<Vec3>& pos = mesh.positions;
   const std::vector<Triangle>& tris = mesh.triangles;
   const auto vertexCount = static_cast<uint32_t>(pos.size());
-
-  if (tris.empty()) return "the mesh has no triangles";
-
-  // Cheap per-element checks first, so that later checks can index and measure safely.
   for (uint32_t i = 0; i < vertexCount; ++i) {
     if (!isFinite(pos[i])) return "vertex " + std::to_string(i) + " has a non-finite coordinate";
   }
@@ -603,18 +640,23 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surf
       return "triangle " + std::to_string(t) + " " + triangleText(tri) + " has zero area";
     }
   }
-  {
-    std::vector<bool> used(vertexCount, false);
-    for (const Triangle& t : tris) {
-      for (uint32_t v : t) used[v] = true;
-    }
-    for (uint32_t i = 0; i < vertexCount; ++i) {
-      if (!used[i]) return "vertex " + std::to_string(i) + " is not used by any triangle";
-    }
+  std::vector<bool> used(vertexCount, false);
+  for (const Triangle& t : tris) {
+    for (uint32_t v : t) used[v] = true;
   }
+  for (uint32_t i = 0; i < vertexCount; ++i) {
+    if (!used[i]) return "vertex " + std::to_string(i) + " is not used by any triangle";
+  }
+  return std::nullopt;
+}
 
-  // Edges: all half-edges sorted by undirected key, so each edge's uses are adjacent. Each
-  // category is checked over all edges before the next, so the most severe problem is reported.
+// The uses of one undirected edge: halfEdges[begin, end).
+struct EdgeGroup {
+  std::size_t begin, end;
+};
+
+// All half-edges sorted by undirected key, so each edge's uses are adjacent, and their groups.
+std::vector<HalfEdge> sortedHalfEdges(const std::vector<Triangle>& tris, std::vector<EdgeGroup>& groups) {
   std::vector<HalfEdge> halfEdges;
   halfEdges.reserve(3 * tris.size());
   for (std::size_t t = 0; t < tris.size(); ++t) {
@@ -627,10 +669,6 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surf
   std::sort(halfEdges.begin(), halfEdges.end(), [](const HalfEdge& x, const HalfEdge& y) {
     return std::tie(x.lo, x.hi, x.triangle, x.from) < std::tie(y.lo, y.hi, y.triangle, y.from);
   });
-  struct EdgeGroup {
-    std::size_t begin, end;
-  };
-  std::vector<EdgeGroup> groups;
   for (std::size_t i = 0; i < halfEdges.size();) {
     std::size_t j = i + 1;
     while (j < halfEdges.size() && halfEdges[j].lo == halfEdges[i].lo &&
@@ -640,6 +678,15 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surf
     groups.push_back({i, j});
     i = j;
   }
+  return halfEdges;
+}
+
+// Step of findManifoldProblem: every edge in at most two triangles, in two unless the surface is
+// open, and walked in opposite directions by them. Each category is checked over all edges before
+// the next, so the most severe problem is reported.
+std::optional<std::string> edgeProblem(const std::vector<Triangle>& tris, Surface surface) {
+  std::vector<EdgeGroup> groups;
+  const std::vector<HalfEdge> halfEdges = sortedHalfEdges(tris, groups);
   for (const EdgeGroup& g : groups) {
     if (g.end - g.begin > 2) {
       const HalfEdge& e = halfEdges[g.begin];
@@ -663,67 +710,87 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surf
              "): flipped face";
     }
   }
+  return std::nullopt;
+}
 
-  // Every edge is now shared by two opposite triangles (or, open, is a border edge), yet a vertex
-  // can still join two or more separate fans (two cones touching at their tips). Around vertex
-  // v, each triangle (v, a, b) contributes the link step a -> b; a manifold vertex's steps form
-  // exactly one cycle, or on an open surface's border one path. (Each a starts at most one step
-  // and each b ends at most one, by the checks above, so the steps form paths and cycles.)
-  {
-    // Link steps grouped by vertex, sorted by `a` so the successor of a is found by binary search.
-    std::vector<std::array<uint32_t, 3>> steps;  // (v, a, b)
-    steps.reserve(3 * tris.size());
-    for (const Triangle& t : tris) {
-      for (std::size_t k = 0; k < 3; ++k) steps.push_back({t[k], t[(k + 1) % 3], t[(k + 2) % 3]});
-    }
-    std::sort(steps.begin(), steps.end());
-    std::vector<bool> visited(steps.size(), false);
-    std::vector<uint32_t> ends;  // Surface::Open: the b of one vertex's steps, sorted
-    for (std::size_t begin = 0; begin < steps.size();) {
-      std::size_t end = begin + 1;
-      while (end < steps.size() && steps[end][0] == steps[begin][0]) ++end;
-      const auto first = steps.begin() + static_cast<std::ptrdiff_t>(begin);
-      const auto last = steps.begin() + static_cast<std::ptrdiff_t>(end);
-      // Marks the cycle through step i. With consistent orientation every a has exactly one
-      // step out, so the walk comes back to i.
-      auto walk = [&](std::size_t i) {
-        while (i < end && !visited[i]) {
-          visited[i] = true;
-          const std::array<uint32_t, 3> probe{steps[i][0], steps[i][2], 0};
-          const auto next = std::lower_bound(first, last, probe);
-          if (next == last || (*next)[1] != steps[i][2]) break;
-          i = static_cast<std::size_t>(next - steps.begin());
-        }
-      };
-      std::size_t fans = 0;
-      if (surface == Surface::Open) {
-        // Paths first, each from its first step (one whose a no step ends at), so that a path is
-        // walked whole; what is left is cycles. On a closed surface there are no paths.
-        ends.clear();
-        for (std::size_t i = begin; i < end; ++i) ends.push_back(steps[i][2]);
-        std::sort(ends.begin(), ends.end());
-        for (std::size_t i = begin; i < end; ++i) {
-          if (visited[i] || std::binary_search(ends.begin(), ends.end(), steps[i][1])) continue;
-          ++fans;
-          walk(i);
-        }
-      }
-      for (std::size_t i = begin; i < end; ++i) {
-        if (visited[i]) continue;
-        ++fans;
-        walk(i);
-      }
-      if (fans > 1) {
-        return "vertex " + std::to_string(steps[begin][0]) + " joins " + std::to_string(fans) +
-               " separate fans of triangles: non-manifold vertex";
-      }
-      begin = end;
+// A link step (v, a, b): triangle (v, a, b) steps from a to b around its corner v.
+using LinkStep = std::array<uint32_t, 3>;
+
+// Marks the link steps of one vertex (steps[begin, end), sorted by a) on the path or cycle from
+// step i. With consistent orientation every a has exactly one step out, so a cycle's walk comes
+// back to i.
+void walkLink(const std::vector<LinkStep>& steps, std::size_t begin, std::size_t end, std::size_t i,
+              std::vector<bool>& visited) {
+  const auto first = steps.begin() + static_cast<std::ptrdiff_t>(begin);
+  const auto last = steps.begin() + static_cast<std::ptrdiff_t>(end);
+  while (i < end && !visited[i]) {
+    visited[i] = true;
+    const LinkStep probe{steps[i][0], steps[i][2], 0};
+    const auto next = std::lower_bound(first, last, probe);
+    if (next == last || (*next)[1] != steps[i][2]) break;
+    i = static_cast<std::size_t>(next - steps.begin());
+  }
+}
+
+// The separate fans of triangles around one vertex: the paths and cycles its link steps
+// steps[begin, end) form. `ends`: scratch.
+std::size_t countFans(const std::vector<LinkStep>& steps, std::size_t begin, std::size_t end, Surface surface,
+                      std::vector<bool>& visited, std::vector<uint32_t>& ends) {
+  std::size_t fans = 0;
+  if (surface == Surface::Open) {
+    // Paths first, each from its first step (one whose a no step ends at), so that a path is
+    // walked whole; what is left is cycles. On a closed surface there are no paths.
+    ends.clear();
+    for (std::size_t i = begin; i < end; ++i) ends.push_back(steps[i][2]);
+    std::sort(ends.begin(), ends.end());
+    for (std::size_t i = begin; i < end; ++i) {
+      if (visited[i] || std::binary_search(ends.begin(), ends.end(), steps[i][1])) continue;
+      ++fans;
+      walkLink(steps, begin, end, i, visited);
     }
   }
+  for (std::size_t i = begin; i < end; ++i) {
+    if (visited[i]) continue;
+    ++fans;
+    walkLink(steps, begin, end, i, visited);
+  }
+  return fans;
+}
 
-  // Connectivity: one piece, or the body would be several bodies.
-  MinUnionFind pieces(vertexCount);
+// Step of findManifoldProblem: every edge is now shared by two opposite triangles (or, open, is a
+// border edge), yet a vertex can still join two or more separate fans (two cones touching at
+// their tips). Around vertex v, each triangle (v, a, b) contributes the link step a -> b; a
+// manifold vertex's steps form exactly one cycle, or on an open surface's border one path. (Each
+// a starts at most one step and each b ends at most one, by the checks before, so the steps form
+// paths and cycles.)
+std::optional<std::string> fanProblem(const std::vector<Triangle>& tris, Surface surface) {
+  // Link steps grouped by vertex, sorted by `a` so the successor of a is found by binary search.
+  std::vector<LinkStep> steps;
+  steps.reserve(3 * tris.size());
   for (const Triangle& t : tris) {
+    for (std::size_t k = 0; k < 3; ++k) steps.push_back({t[k], t[(k + 1) % 3], t[(k + 2) % 3]});
+  }
+  std::sort(steps.begin(), steps.end());
+  std::vector<bool> visited(steps.size(), false);
+  std::vector<uint32_t> ends;  // Surface::Open: the b of one vertex's steps, sorted
+  for (std::size_t begin = 0; begin < steps.size();) {
+    std::size_t end = begin + 1;
+    while (end < steps.size() && steps[end][0] == steps[begin][0]) ++end;
+    const std::size_t fans = countFans(steps, begin, end, surface, visited, ends);
+    if (fans > 1) {
+      return "vertex " + std::to_string(steps[begin][0]) + " joins " + std::to_string(fans) +
+             " separate fans of triangles: non-manifold vertex";
+    }
+    begin = end;
+  }
+  return std::nullopt;
+}
+
+// Step of findManifoldProblem: connectivity: one piece, or the body would be several bodies.
+std::optional<std::string> pieceProblem(const TriMesh& mesh) {
+  const auto vertexCount = static_cast<uint32_t>(mesh.positions.size());
+  MinUnionFind pieces(vertexCount);
+  for (const Triangle& t : mesh.triangles) {
     pieces.unite(t[0], t[1]);
     pieces.unite(t[1], t[2]);
   }
@@ -739,6 +806,26 @@ std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surf
            std::to_string(firstOther) + " are not connected)";
   }
   return std::nullopt;
+}
+
+}  // namespace
+
+TriMesh weldVertices(const TriMesh& mesh, double tolerance) {
+  MinUnionFind sets(mesh.positions.size());
+  if (tolerance > 0.0) {
+    uniteNearVertices(mesh, tolerance, sets);
+  } else {
+    uniteEqualVertices(mesh, sets);
+  }
+  return weldedMesh(mesh, sets);
+}
+
+std::optional<std::string> findManifoldProblem(const TriMesh& mesh, Surface surface) {
+  if (mesh.triangles.empty()) return "the mesh has no triangles";
+  if (auto problem = elementProblem(mesh)) return problem;
+  if (auto problem = edgeProblem(mesh.triangles, surface)) return problem;
+  if (auto problem = fanProblem(mesh.triangles, surface)) return problem;
+  return pieceProblem(mesh);
 }
 
 std::optional<std::string> findStrayVertex(const TriMesh& mesh) {

@@ -1,6 +1,6 @@
 // The one translation unit that includes CGAL (heavy, header-only, GPL-3.0-or-later packages):
 // keep it that way, so that only this file pays CGAL's compile time and -frounding-math.
-#include "sim/proxy.h"
+#include "mesh/proxy.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "sim/error.h"
-#include "sim/mesh_io.h"
+#include "mesh/mesh_io.h"
 
 namespace springy {
 
@@ -185,9 +185,10 @@ struct ThrowOnFirstPair {
   }
 };
 
-}  // namespace
 
-ProxyResult buildProxy(const TriMesh& input, const ProxyOptions& options) {
+// Step of buildProxy: options it can work with: a finite target edge (or 0 with a vertex
+// count), positive alpha and offset, iterations not negative.
+void checkProxyOptions(const ProxyOptions& options) {
   if (!(options.targetEdge >= 0.0) || !std::isfinite(options.targetEdge)) {
     throw Error("proxy: the target edge length must be a finite positive number, or 0 to use a vertex count");
   }
@@ -197,6 +198,11 @@ ProxyResult buildProxy(const TriMesh& input, const ProxyOptions& options) {
   if (!(options.alpha > 0.0) || !(options.offset > 0.0) || options.remeshIterations < 0) {
     throw Error("proxy: alpha and offset must be positive and the remeshing iterations not negative");
   }
+}
+
+// Step of buildProxy: the input's area [mesh units^2], from finite vertices and indices in range;
+// an input without any is refused.
+double checkedInputArea(const TriMesh& input) {
   const std::size_t vertexCount = input.positions.size();
   for (std::size_t i = 0; i < vertexCount; ++i) {
     if (!isFinite(input.positions[i])) {
@@ -214,31 +220,20 @@ ProxyResult buildProxy(const TriMesh& input, const ProxyOptions& options) {
     inputArea += triangleArea(input.positions, input.triangles[t]);
   }
   if (!(inputArea > 0.0)) throw Error("proxy: the mesh has no triangle with area");
+  return inputArea;
+}
 
-  // The wrap's scale: the target edge, or first a guess from the input's area (which counts
-  // both sides of an open sheet once, and overlaps twice: the final edge comes from the wrap).
-  const double scale = options.targetEdge > 0.0 ? options.targetEdge
-                                                : edgeForVertices(inputArea, options.targetVertices);
-  const double vertexEstimate = options.targetEdge > 0.0 ? 2.0 * inputArea / (std::sqrt(3.0) * scale * scale)
-                                                         : static_cast<double>(options.targetVertices);
-  if (vertexEstimate > kMaxVertexEstimate) {
-    throw Error("proxy: a proxy of about " + formatNumber(vertexEstimate) + " vertices is too many (at most " +
-                formatNumber(kMaxVertexEstimate) + "): give a longer target edge or fewer vertices");
-  }
-  ProxyResult result;
-  result.alpha = options.alpha * scale;
-  result.offset = options.offset * scale;
-
+// Step of buildProxy: wraps the input (alpha and offset in `result`), keeps the largest piece and
+// remeshes it to the target edge. A part of the input thinner than the edge (a sheet, a fin, a
+// needle) is wrapped as a shell 2 x offset thick, which remeshing at the target edge can fold
+// through itself: then the wrap is redone with the offset doubled, up to kMaxOffsetRetries times.
+void wrapAndRemesh(const TriMesh& input, const ProxyOptions& options, ProxyResult& result) {
   std::vector<Point> points;
-  points.reserve(vertexCount);
+  points.reserve(input.positions.size());
   for (const Vec3& p : input.positions) points.emplace_back(p.x, p.y, p.z);
   std::vector<std::array<std::size_t, 3>> soup;
   soup.reserve(input.triangles.size());
   for (const Triangle& t : input.triangles) soup.push_back({t[0], t[1], t[2]});
-
-  // A part of the input thinner than the edge (a sheet, a fin, a needle) is wrapped as a shell
-  // 2 x offset thick, which remeshing at the target edge can fold through itself: then the wrap
-  // is redone with the offset doubled, up to kMaxOffsetRetries times.
   for (int attempt = 0;; ++attempt) {
     SurfaceMesh mesh;
     CGAL::alpha_wrap_3(points, soup, result.alpha, result.offset, mesh);
@@ -253,25 +248,52 @@ ProxyResult buildProxy(const TriMesh& input, const ProxyOptions& options) {
     result.selfIntersecting = PMP::does_self_intersect(mesh);
     if (!result.selfIntersecting || attempt == kMaxOffsetRetries) {
       result.mesh = toTriMesh(mesh);
-      break;
+      return;
     }
     result.offset *= 2.0;
   }
+}
+
+// Step of buildProxy: the summary line, with what was dropped or raised (`scale`: the wrap's
+// scale, which the offset option is relative to).
+std::string proxySummary(const TriMesh& input, const ProxyOptions& options, double scale, const ProxyResult& result) {
+  std::string summary = "wrapped " + std::to_string(input.triangles.size()) + " triangles (" + describeInput(input) +
+                        ") into a closed proxy of " + std::to_string(result.mesh.positions.size()) +
+                        " vertices, edge " + formatNumber(result.edge);
+  if (result.droppedPieces > 0) {
+    summary += "; kept the largest of " + std::to_string(result.droppedPieces + 1) +
+               " separate wraps (parts farther apart than alpha " + formatNumber(result.alpha) + ")";
+  }
+  if (result.offset > options.offset * scale) {
+    summary += "; offset raised to " + formatNumber(result.offset) + " (parts thinner than the edge)";
+  }
+  if (result.selfIntersecting) summary += "; self-intersecting (parts thinner than the edge)";
+  return summary;
+}
+
+}  // namespace
+
+ProxyResult buildProxy(const TriMesh& input, const ProxyOptions& options) {
+  checkProxyOptions(options);
+  const double inputArea = checkedInputArea(input);
+  // The wrap's scale: the target edge, or first a guess from the input's area (which counts
+  // both sides of an open sheet once, and overlaps twice: the final edge comes from the wrap).
+  const double scale = options.targetEdge > 0.0 ? options.targetEdge
+                                                : edgeForVertices(inputArea, options.targetVertices);
+  const double vertexEstimate = options.targetEdge > 0.0 ? 2.0 * inputArea / (std::sqrt(3.0) * scale * scale)
+                                                         : static_cast<double>(options.targetVertices);
+  if (vertexEstimate > kMaxVertexEstimate) {
+    throw Error("proxy: a proxy of about " + formatNumber(vertexEstimate) + " vertices is too many (at most " +
+                formatNumber(kMaxVertexEstimate) + "): give a longer target edge or fewer vertices");
+  }
+  ProxyResult result;
+  result.alpha = options.alpha * scale;
+  result.offset = options.offset * scale;
+  wrapAndRemesh(input, options, result);
   if (auto problem = findManifoldProblem(result.mesh)) throw Error("proxy: the result is not usable: " + *problem);
   const double volume = signedVolume(result.mesh.positions, result.mesh.triangles);
   if (!(volume > 0.0)) throw Error("proxy: the result encloses no volume");
-
-  result.summary = "wrapped " + std::to_string(input.triangles.size()) + " triangles (" + describeInput(input) +
-                   ") into a closed proxy of " + std::to_string(result.mesh.positions.size()) + " vertices, edge " +
-                   formatNumber(result.edge);
-  if (result.droppedPieces > 0) {
-    result.summary += "; kept the largest of " + std::to_string(result.droppedPieces + 1) +
-                      " separate wraps (parts farther apart than alpha " + formatNumber(result.alpha) + ")";
-  }
-  if (result.offset > options.offset * scale) {
-    result.summary += "; offset raised to " + formatNumber(result.offset) + " (parts thinner than the edge)";
-  }
-  if (result.selfIntersecting) result.summary += "; self-intersecting (parts thinner than the edge)";
+  result.summary = proxySummary(input, options, scale, result);
   return result;
 }
 

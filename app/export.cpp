@@ -84,6 +84,18 @@ std::vector<StillMesh> colliderMeshes(const SceneDesc& scene, const World& world
   return out;
 }
 
+namespace {
+
+glm::vec3 toGlm(const Vec3& v) { return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}; }
+
+}  // namespace
+
+render::MeshData propMesh(const PropDesc& prop) {
+  return prop.shape == PropDesc::Shape::Box
+             ? render::makeBox(toGlm(prop.center), toGlm(prop.size) * 0.5f)
+             : render::makeCylinder(toGlm(prop.from), toGlm(prop.to), static_cast<float>(prop.radius));
+}
+
 std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world) {
   const Model& model = world.model();
   std::vector<ExportBody> bodies;

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "render/mesh_builders.h"
 #include "scene/scene.h"
 #include "sim/monitor.h"
 
@@ -56,6 +57,9 @@ struct StillMesh {
 // the triangle colliders (its drawn half-size, at most twice their extent: a viewer frames the
 // whole scene, and a 200 m ground would make the bodies specks).
 std::vector<StillMesh> colliderMeshes(const SceneDesc& scene, const World& world);
+
+// A prop's mesh, as the renderer draws it and an export writes it.
+render::MeshData propMesh(const PropDesc& prop);
 
 // A scene colour (sRGB, as springy's renderer reads it) as the linear values glTF's base colour
 // and Blender's material colour mean (IEC 61966-2-1's transfer function).

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <span>
 
+#include "app/export.h"
 #include "sim/error.h"
 
 namespace springy {
@@ -50,30 +51,44 @@ render::RenderSettings renderSettingsOf(const SceneDesc& scene) {
   return s;
 }
 
+namespace {
+
+// The bounds the default camera frames: the bodies' and where they land, their shadows straight
+// down onto each plane they are above (a body dropped onto the ground otherwise falls out of the
+// picture).
+Bounds landingBounds(const SceneDesc& scene, const World& world) {
+  const Bounds bodies = boundsOf(world.positions());
+  Bounds all = bodies;
+  for (const PlaneCollider& p : scene.planes) {
+    const Vec3 n = p.normal;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 x{corner & 1 ? bodies.hi.x : bodies.lo.x, corner & 2 ? bodies.hi.y : bodies.lo.y,
+                   corner & 4 ? bodies.hi.z : bodies.lo.z};
+      const double height = dot(x - p.point, n);
+      if (!(height > 0.0) || !(height < 1e3 * length(bodies.size()) + 1.0)) continue;
+      const Vec3 landing = x - n * height;
+      all = {componentMin(all.lo, landing), componentMax(all.hi, landing)};
+    }
+  }
+  return all;
+}
+
+}  // namespace
+
 SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderSettings settings)
     : scene_(scene), renderer_(settings) {
   checkCamera(scene);
-  const Model& model = world.model();
-  const RenderDesc& rd = scene.view.render;
   integrator_ = std::string(integratorName(world.integrator()));
-  Bounds all = boundsOf(world.positions());
-  // The default camera frames where the bodies land too: their shadows straight down onto each
-  // plane they are above (a body dropped onto the ground otherwise falls out of the picture).
-  {
-    const Bounds bodies = all;
-    for (const PlaneCollider& p : scene.planes) {
-      const Vec3 n = p.normal;
-      for (int corner = 0; corner < 8; ++corner) {
-        const Vec3 x{corner & 1 ? bodies.hi.x : bodies.lo.x, corner & 2 ? bodies.hi.y : bodies.lo.y,
-                     corner & 4 ? bodies.hi.z : bodies.lo.z};
-        const double height = dot(x - p.point, n);
-        if (!(height > 0.0) || !(height < 1e3 * length(bodies.size()) + 1.0)) continue;
-        const Vec3 landing = x - n * height;
-        all = {componentMin(all.lo, landing), componentMax(all.hi, landing)};
-      }
-    }
-  }
-  // Bodies: topology once, body-local indices.
+  Bounds all = landingBounds(scene, world);
+  addBodies(world);
+  addColliders(all);
+  placeCamera(all);
+}
+
+void SceneView::addBodies(const World& world) {
+  const SceneDesc& scene = scene_;
+  const Model& model = world.model();
+  // Topology once, body-local indices.
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     const BodyInfo& info = model.bodies[b];
     const BodyDesc& desc = scene.bodies[b];
@@ -98,6 +113,11 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
     }
     bodyMeshes_.push_back(renderer_.addDynamicMesh(info.vertexCount, indices, toMaterial(scene.view.bodies[b])));
   }
+}
+
+// The planes, triangle colliders and props; `all` grows to hold the triangle colliders.
+void SceneView::addColliders(Bounds& all) {
+  const SceneDesc& scene = scene_;
   for (std::size_t p = 0; p < scene.planes.size(); ++p) {
     const PlaneCollider& plane = scene.planes[p];
     const SurfaceLook& look = scene.view.planes[p];
@@ -127,9 +147,7 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
     }
   }
   for (const PropDesc& p : scene.view.props) {
-    const render::MeshData mesh = p.shape == PropDesc::Shape::Box
-                                      ? render::makeBox(toGlm(p.center), toGlm(p.size) * 0.5f)
-                                      : render::makeCylinder(toGlm(p.from), toGlm(p.to), static_cast<float>(p.radius));
+    const render::MeshData mesh = propMesh(p);
     if (p.motion.moves()) {
       movingProps_.push_back({renderer_.addDynamicMesh(mesh.positions.size() / 3, mesh.indices, toMaterial(p.material), false),
                               static_cast<std::size_t>(&p - scene.view.props.data())});
@@ -138,7 +156,12 @@ SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderS
       renderer_.addStaticMesh(mesh, toMaterial(p.material));
     }
   }
-  // Camera: the scene's, or one that frames everything that moves or collides.
+}
+
+// The camera (the scene's, or one that frames everything that moves or collides: `all`), the light
+// and the sky.
+void SceneView::placeCamera(const Bounds& all) {
+  const RenderDesc& rd = scene_.view.render;
   render::Camera camera;
   if (rd.camera.position) {
     camera.position = toGlm(*rd.camera.position);

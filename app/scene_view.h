@@ -49,6 +49,10 @@ class SceneView {
   std::vector<Moving> movingPlanes_, movingMeshes_, movingProps_;
   std::vector<std::vector<float>> propRest_;  // per moving prop: its mesh's positions at rest
   void placeMovingColliders(double t);
+  // The constructor's steps.
+  void addBodies(const World& world);
+  void addColliders(Bounds& all);
+  void placeCamera(const Bounds& all);
   std::vector<float> placed_;  // scratch: a drawn mesh's positions
   std::string integrator_;
   FrameSnapshot scratch_;  // for draw(world)

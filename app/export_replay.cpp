@@ -83,7 +83,7 @@ class ReplayExport final : public MotionExport {
       points_ += b.vertexCount();
     }
     nlohmann::json stills = nlohmann::json::array();
-    for (const StillMesh& m : colliderMeshes(scene, world)) {
+    for (const ColliderMesh& m : colliderMeshes(scene, world)) {
       std::vector<float> xyz(m.xyz.begin(), m.xyz.end());
       stills.push_back({{"name", m.name},
                         {"color", vec(linearColor(m.look.color))},

@@ -2,7 +2,8 @@
 // --export`): every output frame of every body, as the mesh a viewer sees (the user's own mesh
 // where a proxy simulates it), in one of three formats chosen by the output's extension:
 //   .pc2  Blender's point cache (the Mesh Cache modifier reads it) and a .obj (+ .mtl) beside it
-//         with the bodies at the first frame, one object whose vertices are the cache's points
+//         with the bodies at the first frame, one object whose vertices are the cache's points;
+//         each collider or prop that moves an object of its own with its own cache (FILE.collider0.pc2)
 //   .glb  glTF 2.0 binary: a mesh per body with its colour, its motion as one morph target per
 //         frame and an animation of their weights; the visible colliders as meshes, each that
 //         moves (and each prop that moves) a node whose animation places it at every frame

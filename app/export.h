@@ -8,7 +8,8 @@
 //         frame and an animation of their weights; the visible colliders as meshes, each that
 //         moves (and each prop that moves) a node whose animation places it at every frame
 //   .pvd  ParaView's time series: a folder of .vtu files, one per body and frame, with per-vertex
-//         velocity, strain, contact, pinned (and mass) and the body's volume as field data
+//         velocity, strain, contact, pinned (and mass) and the body's volume as field data; each
+//         collider or prop that moves a series of its own (FILE/collider0_NNNNNN.vtu)
 // Every format streams: a frame is written when it is simulated, so memory does not grow with
 // the run's length. Every output appears complete or not at all (AtomicFile; a folder is built
 // under a temporary name and renamed), and the same run writes the same bytes on any thread count.

@@ -39,12 +39,10 @@ const char* exportExtension(ExportFormat format) {
   return "";
 }
 
-// The visible colliders: triangle meshes as they are, a plane as a square around the bodies
-// and the triangle colliders (its drawn half-size, at most twice their extent: a viewer frames
-// the whole scene, and a 200 m ground would make the bodies specks).
-std::vector<StillMesh> colliderMeshes(const SceneDesc& scene, const World& world) {
-  std::vector<StillMesh> out;
-  Bounds all = boundsOf(world.positions());
+namespace {
+
+// The triangle colliders that are drawn; `all` grows to hold every one (drawn or not).
+void triangleMeshes(const SceneDesc& scene, std::vector<ColliderMesh>& out, Bounds& all) {
   for (std::size_t c = 0; c < scene.triangleColliders.size(); ++c) {
     const TriMesh& m = scene.triangleColliders[c].mesh;
     const Bounds bc = boundsOf(m.positions);
@@ -56,32 +54,125 @@ std::vector<StillMesh> colliderMeshes(const SceneDesc& scene, const World& world
     for (const Triangle& t : m.triangles) indices.insert(indices.end(), t.begin(), t.end());
     const Material look = c < scene.view.triangleColliders.size() ? scene.view.triangleColliders[c].material
                                                                   : Material{};
-    out.push_back({"collider " + std::to_string(c), std::move(xyz), std::move(indices), look});
+    out.push_back({"collider " + std::to_string(c), std::move(xyz), std::move(indices), look,
+                   scene.triangleColliders[c].motion});
   }
+}
+
+// A plane as a square of half-size h about the point of it nearest to `centre`.
+ColliderMesh planeMesh(const PlaneCollider& plane, const Vec3& centre, double h) {
+  const Vec3 n = normalized(plane.normal);
+  const Vec3 middle = centre - n * dot(centre - plane.point, n);
+  // Two directions in the plane.
+  const Vec3 helper = std::abs(n.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+  const Vec3 a = normalized(cross(helper, n)), b = cross(n, a);
+  ColliderMesh out;
+  for (const auto& [s, t] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
+    const Vec3 q = middle + a * (s * h) + b * (t * h);
+    out.xyz.insert(out.xyz.end(), {q.x, q.y, q.z});
+  }
+  // Counter-clockwise seen from the normal's side.
+  const bool ccw = dot(cross(a, b), n) > 0.0;
+  out.indices = ccw ? std::vector<uint32_t>{0, 1, 2, 0, 2, 3} : std::vector<uint32_t>{0, 2, 1, 0, 3, 2};
+  out.motion = plane.motion;
+  return out;
+}
+
+glm::vec3 toGlm(const Vec3& v) { return {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)}; }
+
+}  // namespace
+
+std::vector<ColliderMesh> colliderMeshes(const SceneDesc& scene, const World& world) {
+  std::vector<ColliderMesh> out;
+  Bounds all = boundsOf(world.positions());
+  triangleMeshes(scene, out, all);
   const Vec3 centre = (all.lo + all.hi) * 0.5;
   const double reach = std::max(length(all.hi - all.lo), 1.0);
   for (std::size_t p = 0; p < scene.planes.size(); ++p) {
-    const PlaneCollider& plane = scene.planes[p];
     const SurfaceLook look = p < scene.view.planes.size() ? scene.view.planes[p] : SurfaceLook{};
     if (!look.visible) continue;
-    const Vec3 n = normalized(plane.normal);
-    const Vec3 middle = centre - n * dot(centre - plane.point, n);
-    // Two directions in the plane.
-    const Vec3 helper = std::abs(n.y) < 0.9 ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
-    const Vec3 a = normalized(cross(helper, n)), b = cross(n, a);
-    const double h = std::min(look.extent, reach);
-    std::vector<double> xyz;
-    for (const auto& [s, t] : {std::pair{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}) {
-      const Vec3 q = middle + a * (s * h) + b * (t * h);
-      xyz.insert(xyz.end(), {q.x, q.y, q.z});
-    }
-    // Counter-clockwise seen from the normal's side.
-    const bool ccw = dot(cross(a, b), n) > 0.0;
-    const std::vector<uint32_t> indices = ccw ? std::vector<uint32_t>{0, 1, 2, 0, 2, 3}
-                                              : std::vector<uint32_t>{0, 2, 1, 0, 3, 2};
-    out.push_back({"plane " + std::to_string(p), std::move(xyz), indices, look.material});
+    ColliderMesh& m = out.emplace_back(planeMesh(scene.planes[p], centre, std::min(look.extent, reach)));
+    m.name = "plane " + std::to_string(p);
+    m.look = look.material;
+  }
+  for (std::size_t p = 0; p < scene.view.props.size(); ++p) {
+    const PropDesc& prop = scene.view.props[p];
+    if (!prop.motion.moves()) continue;
+    const render::MeshData mesh = propMesh(prop);
+    out.push_back({"prop " + std::to_string(p), std::vector<double>(mesh.positions.begin(), mesh.positions.end()),
+                   mesh.indices, prop.material, prop.motion});
   }
   return out;
+}
+
+std::vector<ColliderMesh> movingMeshes(const SceneDesc& scene, const World& world) {
+  std::vector<ColliderMesh> out = colliderMeshes(scene, world);
+  std::erase_if(out, [](const ColliderMesh& m) { return !m.moves(); });
+  return out;
+}
+
+void ColliderMesh::placed(double t, std::vector<double>& out) const {
+  const Pose pose = motion.pose(t);
+  out.resize(xyz.size());
+  for (std::size_t k = 0; k + 2 < xyz.size(); k += 3) {
+    const Vec3 x = pose.apply({xyz[k], xyz[k + 1], xyz[k + 2]});
+    out[k] = x.x, out[k + 1] = x.y, out[k + 2] = x.z;
+  }
+}
+
+std::string ColliderMesh::word() const {
+  std::string out = name;
+  std::erase(out, ' ');
+  return out;
+}
+
+render::MeshData propMesh(const PropDesc& prop) {
+  return prop.shape == PropDesc::Shape::Box
+             ? render::makeBox(toGlm(prop.center), toGlm(prop.size) * 0.5f)
+             : render::makeCylinder(toGlm(prop.from), toGlm(prop.to), static_cast<float>(prop.radius));
+}
+
+NodePose nodePose(const Pose& pose) {
+  NodePose out;
+  out.translation = pose.apply({0.0, 0.0, 0.0});
+  // The rotation's matrix m[row][column] (the pose holds its columns) as a quaternion (Shepperd's
+  // method: the largest of w, x, y, z first, for accuracy), w >= 0.
+  const Vec3 &c0 = pose.rx, &c1 = pose.ry, &c2 = pose.rz;
+  const double trace = c0.x + c1.y + c2.z;
+  double x, y, z, w;
+  if (trace > 0.0) {
+    const double s = 2.0 * std::sqrt(trace + 1.0);
+    w = 0.25 * s, x = (c1.z - c2.y) / s, y = (c2.x - c0.z) / s, z = (c0.y - c1.x) / s;
+  } else if (c0.x > c1.y && c0.x > c2.z) {
+    const double s = 2.0 * std::sqrt(1.0 + c0.x - c1.y - c2.z);
+    w = (c1.z - c2.y) / s, x = 0.25 * s, y = (c1.x + c0.y) / s, z = (c2.x + c0.z) / s;
+  } else if (c1.y > c2.z) {
+    const double s = 2.0 * std::sqrt(1.0 + c1.y - c0.x - c2.z);
+    w = (c2.x - c0.z) / s, x = (c1.x + c0.y) / s, y = 0.25 * s, z = (c2.y + c1.z) / s;
+  } else {
+    const double s = 2.0 * std::sqrt(1.0 + c2.z - c0.x - c1.y);
+    w = (c0.y - c1.x) / s, x = (c2.x + c0.z) / s, y = (c2.y + c1.z) / s, z = 0.25 * s;
+  }
+  const double n = (w < 0.0 ? -1.0 : 1.0) / std::sqrt(x * x + y * y + z * z + w * w);
+  out.rotation = {x * n, y * n, z * n, w * n};
+  return out;
+}
+
+void posesAt(const Movement& motion, const std::vector<double>& times, std::vector<float>& translations,
+             std::vector<float>& rotations) {
+  translations.clear(), rotations.clear();
+  std::array<double, 4> last{0, 0, 0, 1};
+  for (double t : times) {
+    NodePose p = nodePose(motion.pose(t));
+    double along = 0.0;
+    for (int k = 0; k < 4; ++k) along += p.rotation[k] * last[k];
+    if (along < 0.0) {
+      for (double& q : p.rotation) q = -q;
+    }
+    last = p.rotation;
+    for (int k = 0; k < 3; ++k) translations.push_back(static_cast<float>(p.translation[k]));
+    for (double q : p.rotation) rotations.push_back(static_cast<float>(q));
+  }
 }
 
 std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world) {

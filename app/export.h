@@ -2,20 +2,25 @@
 // --export`): every output frame of every body, as the mesh a viewer sees (the user's own mesh
 // where a proxy simulates it), in one of three formats chosen by the output's extension:
 //   .pc2  Blender's point cache (the Mesh Cache modifier reads it) and a .obj (+ .mtl) beside it
-//         with the bodies at the first frame, one object whose vertices are the cache's points
+//         with the bodies at the first frame, one object whose vertices are the cache's points;
+//         each collider or prop that moves an object of its own with its own cache (FILE.collider0.pc2)
 //   .glb  glTF 2.0 binary: a mesh per body with its colour, its motion as one morph target per
-//         frame and an animation of their weights; the visible colliders as still meshes
+//         frame and an animation of their weights; the visible colliders as meshes, each that
+//         moves (and each prop that moves) a node whose animation places it at every frame
 //   .pvd  ParaView's time series: a folder of .vtu files, one per body and frame, with per-vertex
-//         velocity, strain, contact, pinned (and mass) and the body's volume as field data
+//         velocity, strain, contact, pinned (and mass) and the body's volume as field data; each
+//         collider or prop that moves a series of its own (FILE/collider0_NNNNNN.vtu)
 // Every format streams: a frame is written when it is simulated, so memory does not grow with
 // the run's length. Every output appears complete or not at all (AtomicFile; a folder is built
 // under a temporary name and renamed), and the same run writes the same bytes on any thread count.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "render/mesh_builders.h"
 #include "scene/scene.h"
 #include "sim/monitor.h"
 
@@ -45,17 +50,44 @@ struct ExportBody {
 // mesh's vertex k (the numbering of messages and pins), not the model's spatial order.
 std::vector<ExportBody> exportBodies(const SceneDesc& scene, const World& world);
 
-// A still mesh of the scene (a collider) as exported: x, y, z per vertex, three indices per triangle.
-struct StillMesh {
-  std::string name;  // "collider K", "plane K"
+// A collider or prop of the scene as exported: x, y, z per vertex where it is at rest, three
+// indices per triangle, and its motion (sim/motion.h; none for one that stands still): at time t
+// its vertices are where motion.pose(t) takes them, as the renderer draws it (app/scene_view.cpp).
+struct ColliderMesh {
+  std::string name;  // "collider K", "plane K", "prop K"
   std::vector<double> xyz;
   std::vector<uint32_t> indices;
   Material look;
+  Movement motion{};
+  bool moves() const { return motion.moves(); }
+  // Its vertices at time t (x, y, z per vertex).
+  void placed(double t, std::vector<double>& out) const;
+  // Its name as one word, for a file or an object ("collider0").
+  std::string word() const;
 };
 // The visible colliders: triangle meshes as they are, a plane as a square around the bodies and
 // the triangle colliders (its drawn half-size, at most twice their extent: a viewer frames the
-// whole scene, and a 200 m ground would make the bodies specks).
-std::vector<StillMesh> colliderMeshes(const SceneDesc& scene, const World& world);
+// whole scene, and a 200 m ground would make the bodies specks); then the props that move (a bar
+// carrying pins), as the renderer draws them. A prop that stands still is not exported.
+std::vector<ColliderMesh> colliderMeshes(const SceneDesc& scene, const World& world);
+// Those of them that move.
+std::vector<ColliderMesh> movingMeshes(const SceneDesc& scene, const World& world);
+
+// A prop's mesh, as the renderer draws it and an export writes it.
+render::MeshData propMesh(const PropDesc& prop);
+
+// A pose (x = R (p - c) + c + d) as a node's translation and rotation, glTF's and three.js's
+// x = R p + t: t = c + d - R c and R as a unit quaternion (x, y, z, w).
+struct NodePose {
+  Vec3 translation;
+  std::array<double, 4> rotation{0, 0, 0, 1};
+};
+NodePose nodePose(const Pose& pose);
+// A motion's poses at `times` (nodePose) as 32-bit floats: the translations (x, y, z each) and the
+// rotations (x, y, z, w each), each quaternion the one of its two (q and -q) nearer the one
+// before, so that a viewer interpolating between keys turns the short way.
+void posesAt(const Movement& motion, const std::vector<double>& times, std::vector<float>& translations,
+             std::vector<float>& rotations);
 
 // A scene colour (sRGB, as springy's renderer reads it) as the linear values glTF's base colour
 // and Blender's material colour mean (IEC 61966-2-1's transfer function).

@@ -3,8 +3,10 @@
 // (the positions' and normals' change from the base), and an animation sets its weight to 1 at
 // frame k's time, linearly between frames, so a viewer plays the run and interpolates between
 // frames. The weights are a sparse accessor (one 1 per frame over zeros): frames x targets
-// values would grow with the square of the run's length. The visible colliders are still meshes
-// (a plane as a square around the bodies).
+// values would grow with the square of the run's length. The visible colliders are meshes (a
+// plane as a square around the bodies); one that moves, and a prop that moves, is a node whose
+// mesh is as it is at rest and whose animation sets its translation (and rotation, where it
+// turns) to its pose at each frame, linearly between frames (glTF's node animation).
 //
 // A GLB is a 12-byte header, the JSON chunk, then the binary chunk; the JSON holds every accessor's
 // range, known only at the end. So the frames' data stream to a spill file (unlinked at once, so
@@ -122,6 +124,7 @@ class GltfExport final : public MotionExport {
         p.targets.push_back({positions, normals, position_.lo, position_.hi});
       }
     }
+    if (!moving_.empty()) times_.push_back(world.time());
     ++written_;
   }
 
@@ -130,105 +133,40 @@ class GltfExport final : public MotionExport {
       throw Error(output_.target() + ": " + std::to_string(written_) + " frames written of " +
                   std::to_string(frames_ + 1) + "; not written");
     }
-    const int targets = static_cast<int>(frames_);
-    // The animation: the frames' times and, shared by every body, the weights (frame k: target
-    // k - 1 at 1, all others 0).
-    int times = -1, weights = -1;
-    if (targets > 0) {
-      std::vector<float> t(static_cast<std::size_t>(frames_ + 1));
-      for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<float>(static_cast<double>(k) * frameTime_);
-      times = accessor(bufferView(spill_.write(t), 4 * t.size(), -1), 0, t.size(), "SCALAR", nullptr);
-      doc_["accessors"][static_cast<std::size_t>(times)]["min"] = {t.front()};
-      doc_["accessors"][static_cast<std::size_t>(times)]["max"] = {t.back()};
-      std::vector<uint32_t> where(static_cast<std::size_t>(targets));
-      for (uint32_t k = 1; k <= static_cast<uint32_t>(targets); ++k) where[k - 1] = k * static_cast<uint32_t>(targets) + k - 1;
-      const std::vector<float> ones(static_cast<std::size_t>(targets), 1.0f);
-      const int whereView = bufferView(spill_.write(where), 4 * where.size(), -1);
-      const int onesView = bufferView(spill_.write(ones), 4 * ones.size(), -1);
-      json a = {{"componentType", kFloat},
-                {"count", static_cast<uint64_t>(frames_ + 1) * static_cast<uint64_t>(targets)},
-                {"type", "SCALAR"},
-                {"sparse",
-                 {{"count", targets},
-                  {"indices", {{"bufferView", whereView}, {"componentType", kUnsignedInt}}},
-                  {"values", {{"bufferView", onesView}}}}}};
-      weights = static_cast<int>(doc_["accessors"].size());
-      doc_["accessors"].push_back(std::move(a));
-    }
+    Animation animation;
+    if (frames_ > 0) frameAccessors(animation);
+    poseChannels(animation);
     // The morph targets' accessors and buffer views follow every other, two of each per target:
     // written as text (targetsJson), a JSON tree of them would cost kilobytes a frame and body.
     const std::size_t firstAccessor = doc_["accessors"].size(), firstView = doc_["bufferViews"].size();
     std::vector<std::string> targetText(bodies_.size());
     std::string accessorText, viewText;
     targetsJson(firstAccessor, firstView, targetText, accessorText, viewText);
-    if (targets > 0) {
+    if (frames_ > 0) {
       doc_["accessors"].push_back("@targets' accessors@");
       doc_["bufferViews"].push_back("@targets' buffer views@");
     }
-    json samplers = json::array(), channels = json::array();
-    for (std::size_t i = 0; i < bodies_.size(); ++i) {
-      const Primitive& p = primitives_[i];
-      json primitive = {{"attributes", {{"POSITION", p.position}, {"NORMAL", p.normal}}},
-                        {"indices", p.indices},
-                        {"material", p.material},
-                        {"mode", 4}};
-      json mesh = {{"name", bodies_[i].name}, {"primitives", json::array({primitive})}};
-      if (targets > 0) {
-        mesh["primitives"][0]["targets"] = "@targets " + std::to_string(i) + "@";
-        mesh["weights"] = std::vector<float>(static_cast<std::size_t>(targets), 0.0f);
-        mesh["extras"] = {{"targetNames", "@names@"}};
-        const int node = static_cast<int>(doc_["nodes"].size());
-        channels.push_back({{"sampler", samplers.size()}, {"target", {{"node", node}, {"path", "weights"}}}});
-        samplers.push_back({{"input", times}, {"output", weights}, {"interpolation", "LINEAR"}});
-      }
-      addNode(bodies_[i].name, std::move(mesh));
-    }
-    for (json& still : stills_) {
-      const std::string name = still["name"];  // before the move: arguments have no order
-      addNode(name, std::move(still));
-    }
-    if (!samplers.empty()) {
-      doc_["animations"] = json::array({{{"name", "springy"}, {"samplers", samplers}, {"channels", channels}}});
+    bodyNodes(animation);
+    stillNodes();
+    if (!animation.samplers.empty()) {
+      doc_["animations"] = json::array(
+          {{{"name", "springy"}, {"samplers", animation.samplers}, {"channels", animation.channels}}});
     }
     doc_["buffers"] = json::array({{{"byteLength", spill_.size()}}});
     // Pad the binary chunk to 4 bytes, the JSON chunk with spaces.
     const uint8_t zeros[4] = {0, 0, 0, 0};
     if (spill_.size() % 4) spill_.write(zeros, 4 - spill_.size() % 4);
     std::string text = doc_.dump();
-    if (targets > 0) {
+    if (frames_ > 0) {
       std::string names;
-      for (int k = 1; k <= targets; ++k) names += (k > 1 ? ",\"frame " : "\"frame ") + std::to_string(k) + "\"";
+      for (long k = 1; k <= frames_; ++k) names += (k > 1 ? ",\"frame " : "\"frame ") + std::to_string(k) + "\"";
       splice(text, "\"@targets' accessors@\"", accessorText);
       splice(text, "\"@targets' buffer views@\"", viewText);
       for (std::size_t i = 0; i < bodies_.size(); ++i) splice(text, "\"@targets " + std::to_string(i) + "@\"", targetText[i]);
       while (text.find("\"@names@\"") != std::string::npos) splice(text, "\"@names@\"", "[" + names + "]");
     }
     text.append((4 - text.size() % 4) % 4, ' ');
-    const uint64_t total = 12 + 8 + text.size() + 8 + spill_.size();
-    if (total > UINT32_MAX) {
-      throw Error(output_.target() + ": the run is " + std::to_string(total >> 20) +
-                  " MiB as glTF, over GLB's 4 GiB; export fewer frames (--fps) or a shorter run, or use .pc2 or .pvd");
-    }
-    auto u32 = [](uint64_t v) {
-      const uint32_t x = static_cast<uint32_t>(v);
-      std::array<uint8_t, 4> b{};
-      std::memcpy(b.data(), &x, 4);
-      return b;
-    };
-    std::vector<uint8_t> head;
-    auto put = [&](const std::array<uint8_t, 4>& b) { head.insert(head.end(), b.begin(), b.end()); };
-    put({'g', 'l', 'T', 'F'});
-    put(u32(2));
-    put(u32(total));
-    put(u32(text.size()));
-    put({'J', 'S', 'O', 'N'});
-    output_.write(head);
-    output_.write(text);
-    head.clear();
-    put(u32(spill_.size()));
-    put({'B', 'I', 'N', 0});
-    output_.write(head);
-    spill_.copyTo(output_);
+    writeGlb(text);
     output_.commit();
   }
 
@@ -288,6 +226,114 @@ class GltfExport final : public MotionExport {
     dumped.replace(at, length, text);
   }
 
+  // The animation: its samplers and channels, the frames' times and the weights the bodies share.
+  struct Animation {
+    int times = -1, weights = -1;
+    json samplers = json::array(), channels = json::array();
+    void add(int node, const char* path, int input, int output) {
+      channels.push_back({{"sampler", samplers.size()}, {"target", {{"node", node}, {"path", path}}}});
+      samplers.push_back({{"input", input}, {"output", output}, {"interpolation", "LINEAR"}});
+    }
+  };
+  // The frames' times and, shared by every body, the weights (frame k: target k - 1 at 1, all
+  // others 0).
+  void frameAccessors(Animation& animation) {
+    const auto targets = static_cast<uint32_t>(frames_);
+    std::vector<float> t(static_cast<std::size_t>(frames_ + 1));
+    for (std::size_t k = 0; k < t.size(); ++k) t[k] = static_cast<float>(static_cast<double>(k) * frameTime_);
+    animation.times = accessor(bufferView(spill_.write(t), 4 * t.size(), -1), 0, t.size(), "SCALAR", nullptr);
+    doc_["accessors"][static_cast<std::size_t>(animation.times)]["min"] = {t.front()};
+    doc_["accessors"][static_cast<std::size_t>(animation.times)]["max"] = {t.back()};
+    std::vector<uint32_t> where(targets);
+    for (uint32_t k = 1; k <= targets; ++k) where[k - 1] = k * targets + k - 1;
+    const std::vector<float> ones(targets, 1.0f);
+    const int whereView = bufferView(spill_.write(where), 4 * where.size(), -1);
+    const int onesView = bufferView(spill_.write(ones), 4 * ones.size(), -1);
+    json a = {{"componentType", kFloat},
+              {"count", static_cast<uint64_t>(frames_ + 1) * targets},
+              {"type", "SCALAR"},
+              {"sparse",
+               {{"count", targets},
+                {"indices", {{"bufferView", whereView}, {"componentType", kUnsignedInt}}},
+                {"values", {{"bufferView", onesView}}}}}};
+    animation.weights = static_cast<int>(doc_["accessors"].size());
+    doc_["accessors"].push_back(std::move(a));
+  }
+  // Each moving collider's pose at each frame (at the frame's simulated time, where the bodies
+  // are): its node's translation and, where it turns, rotation, keyed at the frames' times; the
+  // first frame's also as the node's own (a viewer that does not play shows the first frame).
+  void poseChannels(Animation& animation) {
+    for (const Moving& m : moving_) {
+      std::vector<float> translation, rotation;
+      posesAt(m.motion, times_, translation, rotation);
+      json& node = stills_[m.still].second;
+      node["translation"] = {translation[0], translation[1], translation[2]};
+      const bool turns = m.motion.spin != 0.0;
+      if (turns) node["rotation"] = {rotation[0], rotation[1], rotation[2], rotation[3]};
+      if (animation.times < 0) continue;
+      const int index = static_cast<int>(bodies_.size() + m.still);
+      animation.add(index, "translation", animation.times, poseAccessor(translation, "VEC3"));
+      if (turns) animation.add(index, "rotation", animation.times, poseAccessor(rotation, "VEC4"));
+    }
+  }
+  int poseAccessor(const std::vector<float>& values, const char* type) {
+    const int view = bufferView(spill_.write(values), 4 * values.size(), -1);
+    return accessor(view, 0, times_.size(), type, nullptr);
+  }
+  // A node per body: its mesh, its morph targets (placeholders, spliced in at the end) and their
+  // weights' channel.
+  void bodyNodes(Animation& animation) {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) {
+      const Primitive& p = primitives_[i];
+      json primitive = {{"attributes", {{"POSITION", p.position}, {"NORMAL", p.normal}}},
+                        {"indices", p.indices},
+                        {"material", p.material},
+                        {"mode", 4}};
+      json mesh = {{"name", bodies_[i].name}, {"primitives", json::array({primitive})}};
+      if (frames_ > 0) {
+        mesh["primitives"][0]["targets"] = "@targets " + std::to_string(i) + "@";
+        mesh["weights"] = std::vector<float>(static_cast<std::size_t>(frames_), 0.0f);
+        mesh["extras"] = {{"targetNames", "@names@"}};
+        animation.add(static_cast<int>(doc_["nodes"].size()), "weights", animation.times, animation.weights);
+      }
+      addNode(bodies_[i].name, std::move(mesh), {});
+    }
+  }
+  void stillNodes() {
+    for (auto& [mesh, node] : stills_) {
+      const std::string name = mesh["name"];  // before the move: arguments have no order
+      addNode(name, std::move(mesh), std::move(node));
+    }
+  }
+  // The GLB's header, its JSON chunk (`text`, padded) and its binary chunk (the spill file).
+  void writeGlb(const std::string& text) {
+    const uint64_t total = 12 + 8 + text.size() + 8 + spill_.size();
+    if (total > UINT32_MAX) {
+      throw Error(output_.target() + ": the run is " + std::to_string(total >> 20) +
+                  " MiB as glTF, over GLB's 4 GiB; export fewer frames (--fps) or a shorter run, or use .pc2 or .pvd");
+    }
+    auto u32 = [](uint64_t v) {
+      const uint32_t x = static_cast<uint32_t>(v);
+      std::array<uint8_t, 4> b{};
+      std::memcpy(b.data(), &x, 4);
+      return b;
+    };
+    std::vector<uint8_t> head;
+    auto put = [&](const std::array<uint8_t, 4>& b) { head.insert(head.end(), b.begin(), b.end()); };
+    put({'g', 'l', 'T', 'F'});
+    put(u32(2));
+    put(u32(total));
+    put(u32(text.size()));
+    put({'J', 'S', 'O', 'N'});
+    output_.write(head);
+    output_.write(text);
+    head.clear();
+    put(u32(spill_.size()));
+    put({'B', 'I', 'N', 0});
+    output_.write(head);
+    spill_.copyTo(output_);
+  }
+
   int bufferView(uint64_t offset, uint64_t length, int target) {
     json v = {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", length}};
     if (target > 0) v["target"] = target;
@@ -320,11 +366,14 @@ class GltfExport final : public MotionExport {
     doc_["materials"].push_back(std::move(j));
     return static_cast<int>(doc_["materials"].size()) - 1;
   }
-  void addNode(const std::string& name, json mesh) {
+  // A node of the scene with `mesh` and the node's other properties `node` (its placement), if any.
+  void addNode(const std::string& name, json mesh, json node) {
     const int index = static_cast<int>(doc_["meshes"].size());
     doc_["meshes"].push_back(std::move(mesh));
     doc_["scenes"][0]["nodes"].push_back(doc_["nodes"].size());
-    doc_["nodes"].push_back({{"name", name}, {"mesh", index}});
+    if (node.is_null()) node = json::object();
+    node["name"] = name, node["mesh"] = index;
+    doc_["nodes"].push_back(std::move(node));
   }
   // A still mesh (a collider): positions and indices now, its node at commit (after the bodies').
   void addStill(const std::string& name, const std::vector<double>& xyz, const std::vector<uint32_t>& indices,
@@ -338,11 +387,15 @@ class GltfExport final : public MotionExport {
                       {"indices", index},
                       {"material", material(name, look, true)},
                       {"mode", 4}};
-    stills_.push_back({{"name", name}, {"primitives", json::array({primitive})}});
+    stills_.emplace_back(json{{"name", name}, {"primitives", json::array({primitive})}}, json());
   }
-  // The visible colliders (colliderMeshes).
+  // The visible colliders and the props that move (colliderMeshes): a moving one is placed by
+  // its node (poseChannels), its mesh as it is at rest.
   void addColliders(const SceneDesc& scene, const World& world) {
-    for (const StillMesh& m : colliderMeshes(scene, world)) addStill(m.name, m.xyz, m.indices, m.look);
+    for (const ColliderMesh& m : colliderMeshes(scene, world)) {
+      if (m.moves()) moving_.push_back({stills_.size(), m.motion});
+      addStill(m.name, m.xyz, m.indices, m.look);
+    }
   }
 
   AtomicFile output_;
@@ -352,7 +405,15 @@ class GltfExport final : public MotionExport {
   std::vector<ExportBody> bodies_;
   std::vector<Primitive> primitives_;
   std::vector<std::pair<std::vector<double>, std::vector<double>>> base_;  // per body: the first frame
-  std::vector<json> stills_;
+  // A collider's mesh and its node's placement (null for one that stands still), added at commit
+  // after the bodies' nodes.
+  std::vector<std::pair<json, json>> stills_;
+  struct Moving {
+    std::size_t still;  // in stills_
+    Movement motion;
+  };
+  std::vector<Moving> moving_;
+  std::vector<double> times_;  // each frame's simulated time, when something moves
   json doc_;
   Floats position_, normal_;
   std::vector<double> xyz_, normals_;

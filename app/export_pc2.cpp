@@ -1,5 +1,7 @@
 // The point cache: FILE.pc2 (every frame's points) and FILE.obj + FILE.mtl (the bodies at the first
-// frame as one object, vertex k of the object point k of the cache). PC2 is the point-cache format
+// frame as one object, vertex k of the object point k of the cache). A collider or prop that
+// moves is an object of its own in the OBJ with a cache of its own, FILE.collider0.pc2 (Blender's
+// Mesh Cache modifier reads one file per object). PC2 is the point-cache format
 // of 3ds Max that Blender's Mesh Cache modifier reads: a 32-byte header ("POINTCACHE2\0", version
 // 1, the point count, the first frame, frames per sample, the sample count), then x, y, z as
 // little-endian 32-bit floats per point per sample.
@@ -27,31 +29,55 @@ std::string objName(uint32_t index, const std::string& name) {
   return out;
 }
 
+// A PC2 file's header: `points` per sample, `samples` samples; sample k is frame k (Blender's
+// frames, at the scene's rate).
+void writeHeader(AtomicFile& cache, std::size_t points, long samples) {
+  if (points > static_cast<std::size_t>(INT32_MAX)) throw Error(cache.target() + ": too many points for a PC2 file");
+  unsigned char header[32] = {};
+  std::memcpy(header, "POINTCACHE2", 12);
+  const int32_t version = 1, count = static_cast<int32_t>(points), sampleCount = static_cast<int32_t>(samples);
+  const float start = 0.0f, rate = 1.0f;
+  std::memcpy(header + 12, &version, 4);
+  std::memcpy(header + 16, &count, 4);
+  std::memcpy(header + 20, &start, 4);
+  std::memcpy(header + 24, &rate, 4);
+  std::memcpy(header + 28, &sampleCount, 4);
+  cache.write({header, sizeof header});
+}
+
+// A sample of a PC2 file: the points as 32-bit floats.
+void writeSample(AtomicFile& cache, const std::vector<float>& sample) {
+  cache.write({reinterpret_cast<const uint8_t*>(sample.data()), sample.size() * sizeof(float)});
+}
+
+// A material of the MTL file.
+std::string mtlEntry(const std::string& name, const Material& m) {
+  const Vec3 kd = linearColor(m.color);  // Blender's importer takes Kd as the linear base colour
+  char line[160];
+  std::snprintf(line, sizeof line, "Kd %.6g %.6g %.6g\nd %.6g\nNs %.6g\n", kd.x, kd.y, kd.z, m.alpha, m.shininess);
+  return "newmtl " + name + "\n" + line;
+}
+
 class PointCacheExport final : public MotionExport {
  public:
   PointCacheExport(const std::string& path, const SceneDesc& scene, const World& world, long frames,
                    double frameTime, const std::vector<std::string>& inputs)
-      : scene_(scene), frames_(frames), bodies_(exportBodies(scene, world)) {
+      : scene_(scene), frames_(frames), bodies_(exportBodies(scene, world)), moving_(movingMeshes(scene, world)) {
     namespace fs = std::filesystem;
     const fs::path target(path);
     objPath_ = fs::path(target).replace_extension(".obj").string();
     mtlPath_ = fs::path(target).replace_extension(".mtl").string();
-    // All three are created now: a directory that cannot take them fails before the run.
+    // All are created now: a directory that cannot take them fails before the run.
     cache_ = std::make_unique<AtomicFile>(path, inputs);
     obj_ = std::make_unique<AtomicFile>(objPath_, inputs);
     mtl_ = std::make_unique<AtomicFile>(mtlPath_, inputs);
     for (const ExportBody& b : bodies_) points_ += b.vertexCount();
-    if (points_ > static_cast<std::size_t>(INT32_MAX)) throw Error(path + ": too many points for a PC2 file");
-    unsigned char header[32] = {};
-    std::memcpy(header, "POINTCACHE2", 12);
-    const int32_t version = 1, count = static_cast<int32_t>(points_), samples = static_cast<int32_t>(frames + 1);
-    const float start = 0.0f, rate = 1.0f;  // sample k is frame k (Blender's frames, at the scene's rate)
-    std::memcpy(header + 12, &version, 4);
-    std::memcpy(header + 16, &count, 4);
-    std::memcpy(header + 20, &start, 4);
-    std::memcpy(header + 24, &rate, 4);
-    std::memcpy(header + 28, &samples, 4);
-    cache_->write({header, sizeof header});
+    writeHeader(*cache_, points_, frames + 1);
+    // A cache per moving collider or prop, beside the bodies': FILE.collider0.pc2.
+    for (const ColliderMesh& m : moving_) {
+      const std::string name = fs::path(target).replace_extension("." + m.word() + ".pc2").string();
+      writeHeader(*movingCaches_.emplace_back(std::make_unique<AtomicFile>(name, inputs)), m.xyz.size() / 3, frames + 1);
+    }
     (void)frameTime;
   }
 
@@ -62,8 +88,14 @@ class PointCacheExport final : public MotionExport {
       drawnPositions(b, world, xyz_);
       for (double c : xyz_) sample.push_back(static_cast<float>(c));
     }
-    if (written_ == 0) writeObj(sample);
-    cache_->write({reinterpret_cast<const uint8_t*>(sample.data()), sample.size() * sizeof(float)});
+    std::vector<std::vector<float>> placed;
+    for (std::size_t j = 0; j < moving_.size(); ++j) {
+      moving_[j].placed(world.time(), xyz_);
+      placed.emplace_back(xyz_.begin(), xyz_.end());
+      writeSample(*movingCaches_[j], placed.back());
+    }
+    if (written_ == 0) writeObj(sample, placed);
+    writeSample(*cache_, sample);
     ++written_;
   }
 
@@ -74,49 +106,72 @@ class PointCacheExport final : public MotionExport {
     }
     mtl_->commit();
     obj_->commit();
+    for (auto& c : movingCaches_) c->commit();
     cache_->commit();
   }
 
-  std::string written() const override { return cache_->target() + " with " + objPath_ + " and " + mtlPath_; }
+  std::string written() const override {
+    std::string out = cache_->target() + " with " + objPath_;
+    for (const auto& c : movingCaches_) out += ", " + c->target();
+    return out + " and " + mtlPath_;
+  }
 
  private:
   // The first frame as an OBJ whose vertices are the cache's points, in order: one object
   // ("o springy"; Blender's importer keeps one object's vertices in the file's order), a group
-  // and a material per body.
-  void writeObj(const std::vector<float>& sample) {
+  // and a material per body; then an object per moving collider or prop ("o collider0"), its
+  // vertices its own cache's points.
+  void writeObj(const std::vector<float>& sample, const std::vector<std::vector<float>>& placed) {
     namespace fs = std::filesystem;
     std::string text = "# springy export of " + scene_.path + " (" + scene_.name + "): " +
                        std::to_string(bodies_.size()) + " bodies, " + std::to_string(points_) +
                        " points, the first of " + std::to_string(frames_ + 1) + " frames; " +
                        fs::path(cache_->target()).filename().string() + " holds them all\n";
-    text += "mtllib " + fs::path(mtlPath_).filename().string() + "\no springy\n";
-    char line[160];
-    for (std::size_t k = 0; k < points_; ++k) {
-      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", sample[3 * k], sample[3 * k + 1], sample[3 * k + 2]);
-      text += line;
+    if (!moving_.empty()) {
+      text += "# then each collider and prop that moves (" + std::to_string(moving_.size()) +
+              "): an object, whose points " + fs::path(cache_->target()).stem().string() + ".NAME.pc2 holds\n";
     }
+    text += "mtllib " + fs::path(mtlPath_).filename().string() + "\no springy\n";
+    appendVertices(sample, text);
     std::string materials = "# springy export: the bodies' colours\n";
     std::size_t first = 1;  // OBJ counts from 1
     for (const ExportBody& b : bodies_) {
       const std::string name = objName(b.body, b.name);
       text += "g " + name + "\nusemtl " + name + "\n";
-      for (const Triangle& t : b.triangles) {
-        std::snprintf(line, sizeof line, "f %zu %zu %zu\n", first + t[0], first + t[1], first + t[2]);
-        text += line;
-      }
+      for (const Triangle& t : b.triangles) appendFace(first, t.data(), text);
       first += b.vertexCount();
-      const Material& m = b.look;
-      const Vec3 kd = linearColor(m.color);  // Blender's importer takes Kd as the linear base colour
-      std::snprintf(line, sizeof line, "Kd %.6g %.6g %.6g\nd %.6g\nNs %.6g\n", kd.x, kd.y, kd.z, m.alpha, m.shininess);
-      materials += "newmtl " + name + "\n" + line;
+      materials += mtlEntry(name, b.look);
+    }
+    for (std::size_t j = 0; j < moving_.size(); ++j) {
+      const ColliderMesh& m = moving_[j];
+      text += "o " + m.word() + "\n";
+      appendVertices(placed[j], text);
+      text += "usemtl " + m.word() + "\n";
+      for (std::size_t i = 0; i + 2 < m.indices.size(); i += 3) appendFace(first, &m.indices[i], text);
+      first += m.xyz.size() / 3;
+      materials += mtlEntry(m.word(), m.look);
     }
     obj_->write(text);
     mtl_->write(materials);
+  }
+  static void appendVertices(const std::vector<float>& xyz, std::string& text) {
+    char line[160];
+    for (std::size_t k = 0; k + 2 < xyz.size(); k += 3) {
+      std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", xyz[k], xyz[k + 1], xyz[k + 2]);
+      text += line;
+    }
+  }
+  static void appendFace(std::size_t first, const uint32_t* t, std::string& text) {
+    char line[160];
+    std::snprintf(line, sizeof line, "f %zu %zu %zu\n", first + t[0], first + t[1], first + t[2]);
+    text += line;
   }
 
   const SceneDesc& scene_;
   long frames_;
   std::vector<ExportBody> bodies_;
+  std::vector<ColliderMesh> moving_;
+  std::vector<std::unique_ptr<AtomicFile>> movingCaches_;  // parallel to moving_
   std::size_t points_ = 0;
   std::string objPath_, mtlPath_;
   std::unique_ptr<AtomicFile> cache_, obj_, mtl_;

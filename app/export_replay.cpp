@@ -1,8 +1,9 @@
 // The 3D replay of a report page (app/report.cpp): a classic script, REPLAY.js, that sets two
 // globals for the page's viewer (app/report/viewer.js):
 //   springyReplayData    the scene: per body its name, colour, vertex count, quantum and triangles;
-//                        the visible colliders as still meshes; the camera the scene gives; the
-//                        frame rate and count
+//                        the visible colliders as meshes at rest, with their poses at the kept
+//                        frames where they move (and the props that move); the camera the scene
+//                        gives; the frame rate and count
 //   springyReplayMotion  every kept frame's positions, deflated (zlib, RFC 1950) and in base64
 // A script, not a file the page fetches: a page opened from a folder (file://) may not fetch
 // files, but it may load scripts. The positions are quantized to 1/16384 of each body's size at
@@ -83,8 +84,9 @@ class ReplayExport final : public MotionExport {
       points_ += b.vertexCount();
     }
     nlohmann::json stills = nlohmann::json::array();
-    for (const StillMesh& m : colliderMeshes(scene, world)) {
+    for (const ColliderMesh& m : colliderMeshes(scene, world)) {
       std::vector<float> xyz(m.xyz.begin(), m.xyz.end());
+      if (m.moves()) moving_.push_back({stills.size(), m.motion});
       stills.push_back({{"name", m.name},
                         {"color", vec(linearColor(m.look.color))},
                         {"alpha", m.look.alpha},
@@ -130,6 +132,7 @@ class ReplayExport final : public MotionExport {
       }
     }
     deflateSome(reinterpret_cast<const uint8_t*>(delta_.data()), delta_.size() * sizeof(int32_t), Z_NO_FLUSH);
+    if (!moving_.empty()) times_.push_back(world.time());
     ++written_;
   }
 
@@ -139,6 +142,7 @@ class ReplayExport final : public MotionExport {
                   "; not written");
     }
     deflateSome(nullptr, 0, Z_FINISH);
+    addPoses();
     output_.write("// springy report: the 3D replay of " + header_["scene"].get<std::string>() +
                   " (app/export_replay.cpp)\nwindow.springyReplayData = " + header_.dump() +
                   ";\nwindow.springyReplayMotion = \"");
@@ -169,9 +173,28 @@ class ReplayExport final : public MotionExport {
     }
   }
 
+  // A moving collider's or prop's poses at the kept frames (at each one's simulated time, where
+  // the bodies are), added to its mesh at rest: "translations" (x, y, z per frame) and, where it
+  // turns, "rotations" (the quaternion's x, y, z, w per frame): three.js's position and quaternion
+  // of its mesh, as 32-bit floats in base64.
+  void addPoses() {
+    for (const Moving& m : moving_) {
+      std::vector<float> translations, rotations;
+      posesAt(m.motion, times_, translations, rotations);
+      header_["stills"][m.still]["translations"] = base64Of(translations);
+      if (m.motion.spin != 0.0) header_["stills"][m.still]["rotations"] = base64Of(rotations);
+    }
+  }
+
+  struct Moving {
+    std::size_t still;  // in the header's stills
+    Movement motion;
+  };
   AtomicFile output_;
   SpillFile spill_;
   std::vector<ExportBody> bodies_;
+  std::vector<Moving> moving_;
+  std::vector<double> times_;  // the kept frames' simulated times, when something moves
   std::vector<double> quanta_;
   std::size_t points_ = 0;
   long stride_ = 1, kept_ = 0, seen_ = 0, written_ = 0;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <span>
 
+#include "app/export.h"
 #include "sim/error.h"
 
 namespace springy {
@@ -26,38 +27,6 @@ Vec3 forwardFromAngles(const Vec3& degrees) {
   const double rx = degrees.x * kPi / 180, ry = degrees.y * kPi / 180;
   const Vec3 f{0.0, -std::sin(rx), std::cos(rx)};  // pitch about x (roll about z leaves +z alone)
   return {f.x * std::cos(ry) + f.z * std::sin(ry), f.y, -f.x * std::sin(ry) + f.z * std::cos(ry)};
-}
-
-
-// The bodies' bounds grown by where they land: their shadows straight down onto each plane they
-// are above, so that the default camera frames them too (a body dropped onto the ground
-// otherwise falls out of the picture).
-Bounds withLandings(const Bounds& bodies, const std::vector<PlaneCollider>& planes) {
-  Bounds all = bodies;
-  for (const PlaneCollider& p : planes) {
-    const Vec3 n = p.normal;
-    for (int corner = 0; corner < 8; ++corner) {
-      const Vec3 x{corner & 1 ? bodies.hi.x : bodies.lo.x, corner & 2 ? bodies.hi.y : bodies.lo.y,
-                   corner & 4 ? bodies.hi.z : bodies.lo.z};
-      const double height = dot(x - p.point, n);
-      if (!(height > 0.0) || !(height < 1e3 * length(bodies.size()) + 1.0)) continue;
-      const Vec3 landing = x - n * height;
-      all = {componentMin(all.lo, landing), componentMax(all.hi, landing)};
-    }
-  }
-  return all;
-}
-
-// The scene's camera, or one that frames `all` (everything that moves or collides).
-render::Camera sceneCamera(const CameraDesc& c, const Bounds& all, float aspect) {
-  if (!c.position) return render::frameBounds(toGlm(all.lo), toGlm(all.hi), aspect, static_cast<float>(c.fov));
-  render::Camera camera;
-  camera.position = toGlm(*c.position);
-  camera.target = c.target ? toGlm(*c.target) : toGlm(*c.position + forwardFromAngles(c.angles.value_or(Vec3{})));
-  camera.fovYDeg = static_cast<float>(c.fov);
-  camera.farPlane = 1000.0f;
-  camera.nearPlane = 0.1f;
-  return camera;
 }
 
 }  // namespace
@@ -82,27 +51,44 @@ render::RenderSettings renderSettingsOf(const SceneDesc& scene) {
   return s;
 }
 
+namespace {
+
+// The bounds the default camera frames: the bodies' and where they land, their shadows straight
+// down onto each plane they are above (a body dropped onto the ground otherwise falls out of the
+// picture).
+Bounds landingBounds(const SceneDesc& scene, const World& world) {
+  const Bounds bodies = boundsOf(world.positions());
+  Bounds all = bodies;
+  for (const PlaneCollider& p : scene.planes) {
+    const Vec3 n = p.normal;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3 x{corner & 1 ? bodies.hi.x : bodies.lo.x, corner & 2 ? bodies.hi.y : bodies.lo.y,
+                   corner & 4 ? bodies.hi.z : bodies.lo.z};
+      const double height = dot(x - p.point, n);
+      if (!(height > 0.0) || !(height < 1e3 * length(bodies.size()) + 1.0)) continue;
+      const Vec3 landing = x - n * height;
+      all = {componentMin(all.lo, landing), componentMax(all.hi, landing)};
+    }
+  }
+  return all;
+}
+
+}  // namespace
+
 SceneView::SceneView(const SceneDesc& scene, const World& world, render::RenderSettings settings)
     : scene_(scene), renderer_(settings) {
   checkCamera(scene);
-  const RenderDesc& rd = scene.view.render;
   integrator_ = std::string(integratorName(world.integrator()));
-  Bounds all = withLandings(boundsOf(world.positions()), scene.planes);
-  addBodies(world.model());
-  addPlanes();
-  addTriangleColliders(all);
-  addProps();
-  renderer_.setCamera(sceneCamera(rd.camera, all, renderer_.aspect()));
-  render::Light light;
-  light.direction = toGlm(forwardFromAngles(rd.light.angles));
-  light.colour = toGlm(rd.light.color) * 0.9f;
-  light.ambient = glm::vec3(static_cast<float>(rd.light.ambient));
-  renderer_.setLight(light);
-  renderer_.setSky(toGlm(rd.skyTop), toGlm(rd.skyBottom));
+  Bounds all = landingBounds(scene, world);
+  addBodies(world);
+  addColliders(all);
+  placeCamera(all);
 }
 
-void SceneView::addBodies(const Model& model) {
+void SceneView::addBodies(const World& world) {
   const SceneDesc& scene = scene_;
+  const Model& model = world.model();
+  // Topology once, body-local indices.
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     const BodyInfo& info = model.bodies[b];
     const BodyDesc& desc = scene.bodies[b];
@@ -129,7 +115,8 @@ void SceneView::addBodies(const Model& model) {
   }
 }
 
-void SceneView::addPlanes() {
+// The planes, triangle colliders and props; `all` grows to hold the triangle colliders.
+void SceneView::addColliders(Bounds& all) {
   const SceneDesc& scene = scene_;
   for (std::size_t p = 0; p < scene.planes.size(); ++p) {
     const PlaneCollider& plane = scene.planes[p];
@@ -141,10 +128,6 @@ void SceneView::addPlanes() {
                                                   static_cast<float>(look.extent), c * 1.12f, c * 0.88f, 2.0f);
     if (plane.motion.moves()) movingPlanes_.push_back({id, p});
   }
-}
-
-void SceneView::addTriangleColliders(Bounds& all) {
-  const SceneDesc& scene = scene_;
   for (std::size_t c = 0; c < scene.triangleColliders.size(); ++c) {
     const TriMesh& m = scene.triangleColliders[c].mesh;
     const SurfaceLook& look = scene.view.triangleColliders[c];
@@ -163,14 +146,8 @@ void SceneView::addTriangleColliders(Bounds& all) {
       renderer_.addStaticMesh(xyz, indices, toMaterial(look.material));
     }
   }
-}
-
-void SceneView::addProps() {
-  const SceneDesc& scene = scene_;
   for (const PropDesc& p : scene.view.props) {
-    const render::MeshData mesh = p.shape == PropDesc::Shape::Box
-                                      ? render::makeBox(toGlm(p.center), toGlm(p.size) * 0.5f)
-                                      : render::makeCylinder(toGlm(p.from), toGlm(p.to), static_cast<float>(p.radius));
+    const render::MeshData mesh = propMesh(p);
     if (p.motion.moves()) {
       movingProps_.push_back({renderer_.addDynamicMesh(mesh.positions.size() / 3, mesh.indices, toMaterial(p.material), false),
                               static_cast<std::size_t>(&p - scene.view.props.data())});
@@ -179,6 +156,30 @@ void SceneView::addProps() {
       renderer_.addStaticMesh(mesh, toMaterial(p.material));
     }
   }
+}
+
+// The camera (the scene's, or one that frames everything that moves or collides: `all`), the light
+// and the sky.
+void SceneView::placeCamera(const Bounds& all) {
+  const RenderDesc& rd = scene_.view.render;
+  render::Camera camera;
+  if (rd.camera.position) {
+    camera.position = toGlm(*rd.camera.position);
+    camera.target = rd.camera.target ? toGlm(*rd.camera.target)
+                    : toGlm(*rd.camera.position + forwardFromAngles(rd.camera.angles.value_or(Vec3{})));
+    camera.fovYDeg = static_cast<float>(rd.camera.fov);
+    camera.farPlane = 1000.0f;
+    camera.nearPlane = 0.1f;
+  } else {
+    camera = render::frameBounds(toGlm(all.lo), toGlm(all.hi), renderer_.aspect(), static_cast<float>(rd.camera.fov));
+  }
+  renderer_.setCamera(camera);
+  render::Light light;
+  light.direction = toGlm(forwardFromAngles(rd.light.angles));
+  light.colour = toGlm(rd.light.color) * 0.9f;
+  light.ambient = glm::vec3(static_cast<float>(rd.light.ambient));
+  renderer_.setLight(light);
+  renderer_.setSky(toGlm(rd.skyTop), toGlm(rd.skyBottom));
 }
 
 void takeSnapshot(const World& world, FrameSnapshot& snapshot) {

@@ -49,15 +49,10 @@ class SceneView {
   std::vector<Moving> movingPlanes_, movingMeshes_, movingProps_;
   std::vector<std::vector<float>> propRest_;  // per moving prop: its mesh's positions at rest
   void placeMovingColliders(double t);
-  // Steps of the constructor, in the order their meshes are added to the renderer. The bodies:
-  // their topology once, in body-local indices (or the user's mesh over a proxy).
-  void addBodies(const Model& model);
-  // The visible planes, as checkered ground.
-  void addPlanes();
-  // The triangle colliders (the visible ones drawn, still or moving); `all` grows over every one.
-  void addTriangleColliders(Bounds& all);
-  // The props: drawn only, still or moving.
-  void addProps();
+  // The constructor's steps.
+  void addBodies(const World& world);
+  void addColliders(Bounds& all);
+  void placeCamera(const Bounds& all);
   std::vector<float> placed_;  // scratch: a drawn mesh's positions
   std::string integrator_;
   FrameSnapshot scratch_;  // for draw(world)

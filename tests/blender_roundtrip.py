@@ -10,11 +10,15 @@
 # Cache modifier on the object: format PC2, the file, the rest as it is.
 # GLB: File > Import > glTF 2.0, Shading "Smooth" (see below), the rest as it is; the scene's frame rate set to the run's first,
 # so frame k is the run's frame k.
+# A collider or prop that moves is an object of its own: in the OBJ with its own cache
+# (RUN.collider0.pc2 for the object collider0), in the GLB placed by its node's animation; the
+# GLB's objects' world placements (the origin's place, y up) are written too ("glb_placement").
 import argparse
 import json
 import sys
 
 import bpy
+import mathutils
 
 
 def yup(m, co):
@@ -35,6 +39,17 @@ def sample(objects, frames):
             mesh = ev.to_mesh()
             out[o.name][str(f)] = [yup(ev.matrix_world, v.co) for v in mesh.vertices]
             ev.to_mesh_clear()
+    return out
+
+
+def placements(objects, frames):
+    """{object name: {frame: [x, y, z]}}: where each object's world matrix puts its origin (y up)."""
+    scene = bpy.context.scene
+    out = {o.name: {} for o in objects}
+    for f in frames:
+        scene.frame_set(f)
+        for o in objects:
+            out[o.name][str(f)] = yup(o.matrix_world, mathutils.Vector((0.0, 0.0, 0.0)))
     return out
 
 
@@ -63,7 +78,8 @@ def main(argv):
         for o in meshes:
             cache = o.modifiers.new("springy", "MESH_CACHE")
             cache.cache_format = "PC2"
-            cache.filepath = args.pc2
+            # The bodies' object takes RUN.pc2; a moving collider's object, its own RUN.NAME.pc2.
+            cache.filepath = args.pc2 if o.name == "springy" else args.pc2[:-len(".pc2")] + "." + o.name + ".pc2"
             # The rest as it is: start frame 0, axes +Y forward, +Z up (no change: the importer
             # keeps the file's coordinates in the mesh and turns y up into z up with the object's
             # rotation, which applies to the cache's points too).
@@ -76,6 +92,7 @@ def main(argv):
         bpy.ops.import_scene.gltf(filepath=args.glb, import_shading="SMOOTH")
         meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
         result["glb"] = sample(meshes, args.frames)
+        result["glb_placement"] = placements(meshes, args.frames)
         result["glb_frame_range"] = [bpy.context.scene.frame_start, bpy.context.scene.frame_end]
 
     with open(args.out, "w") as f:

@@ -5,9 +5,13 @@ what springy simulated (its trace) and against the mesh's own geometry.
   export_compare.py pvd RUN.pvd TRACE.csv FPS
       ParaView's way into the series: the .pvd collection (XML) names each body's .vtu per time,
       read by VTK's vtkXMLUnstructuredGridReader. Checks the times, the fields and their values.
-  export_compare.py blender RUN.pvd POSITIONS.json
+  export_compare.py blender RUN.pvd POSITIONS.json [--height NAME FRAME Y]...
       Blender's positions (tests/blender_roundtrip.py) at its frames against the series' points,
-      within 1e-5 of each body's size.
+      within 1e-5 of each body's (or moving collider's) size; with --height, the GLB object NAME's
+      world matrix puts its origin at height Y at FRAME (within 1e-6 m).
+  export_compare.py colliders RUN.pvd
+      The moving colliders' series (group "colliders") read by VTK: a frame at each of the bodies'
+      times, each a rigid motion of the first (every distance between two points kept), and moving.
 Exit 0 when every check holds; 1 with a message naming the check, body and frame otherwise.
 """
 import csv
@@ -32,7 +36,7 @@ def check(ok, what):
 
 
 def read_series(pvd):
-    """[(time, part, name, grid)] in the collection's order, each .vtu read by VTK."""
+    """[(time, part, name, grid, group)] in the collection's order, each .vtu read by VTK."""
     root = ET.parse(pvd).getroot()
     assert root.get("type") == "Collection", pvd + " is not a VTK collection"
     series = []
@@ -44,7 +48,7 @@ def read_series(pvd):
         grid = reader.GetOutput()
         if grid.GetNumberOfPoints() == 0:
             raise SystemExit("FAILED: VTK read no points from " + path)
-        series.append((float(ds.get("timestep")), int(ds.get("part")), ds.get("name"), grid))
+        series.append((float(ds.get("timestep")), int(ds.get("part")), ds.get("name"), grid, ds.get("group")))
     return series
 
 
@@ -69,10 +73,13 @@ def edges(grid):
     return np.unique(np.sort(e, axis=1), axis=0)
 
 
-def by_body(series):
+def by_body(series, group=""):
+    """{part: {"name", "frames": [(time, grid)]}} of the bodies (group ""), or of the moving
+    colliders (group "colliders")."""
     bodies = {}
-    for t, part, name, grid in series:
-        bodies.setdefault(part, {"name": name, "frames": []})["frames"].append((t, grid))
+    for t, part, name, grid, g in series:
+        if g == group:
+            bodies.setdefault(part, {"name": name, "frames": []})["frames"].append((t, grid))
     return bodies
 
 
@@ -167,11 +174,67 @@ def compare_pvd(pvd, trace_csv, fps):
     return bodies
 
 
-def compare_blender(pvd, positions_json):
-    bodies = by_body(read_series(pvd))
+def compare_colliders(pvd):
+    series = read_series(pvd)
+    times = [t for t, _ in next(iter(by_body(series).values()))["frames"]]
+    colliders = by_body(series, "colliders")
+    check(len(colliders) > 0, f"{pvd}: a moving collider's series")
+    for part, collider in sorted(colliders.items()):
+        name, frames = collider["name"], collider["frames"]
+        check([t for t, _ in frames] == times, f"{name}: a frame at each of the bodies' {len(times)} times")
+        first = points(frames[0][1])
+        size = size_of(frames[0][1])
+        pairs = np.linalg.norm(first[:, None, :] - first[None, :, :], axis=2)
+        moved = 0.0
+        for k, (t, grid) in enumerate(frames):
+            check(abs(field(grid, "TimeValue") - t) < 1e-9, f"{name} frame {k}: TimeValue differs from the pvd's")
+            p = points(grid)
+            if not check(p.shape == first.shape, f"{name} frame {k}: {p.shape} points, the first frame {first.shape}"):
+                continue
+            d = np.linalg.norm(p[:, None, :] - p[None, :, :], axis=2)
+            check(np.abs(d - pairs).max() <= 1e-9 * size, f"{name} frame {k}: not a rigid motion of the first frame")
+            moved = max(moved, float(np.abs(p - first).max()))
+        check(moved > 1e-3 * size, f"{name}: moves ({moved:.3g} m at most)")
+        print(f"  {name}: {len(frames)} frames, {len(first)} points, size {size:.3g}, moves {moved:.3g} m at most")
+
+
+def compare_blender(pvd, positions_json, heights=()):
+    series = read_series(pvd)
     with open(positions_json) as f:
         blender = json.load(f)
     print(f"  Blender {blender['blender']}")
+    compare_blender_bodies(by_body(series), blender)
+    compare_blender_colliders(by_body(series, "colliders"), blender)
+    for name, frame, y in heights:
+        at = blender.get("glb_placement", {}).get(name, {}).get(frame)
+        if check(at is not None, f"glb: no placement of {name} at frame {frame}"):
+            check(abs(at[1] - float(y)) <= 1e-6, f"glb {name} frame {frame}: its world matrix puts it at height "
+                  f"{at[1]:.9g}, expected {y}")
+            print(f"  glb {name} frame {frame}: at height {at[1]:.9g} (expected {y})")
+
+
+def compare_blender_colliders(colliders, blender):
+    """Each moving collider as Blender has it: the OBJ's object NAME (no spaces) under its own
+    Mesh Cache, the GLB's object NAME placed by its animation; against the series' points."""
+    for source in ("obj", "glb"):
+        objects = blender.get(source, {})
+        for part, collider in sorted(colliders.items()):
+            name = collider["name"].replace(" ", "") if source == "obj" else collider["name"]
+            if not check(name in objects, f"{source}: no object named {name} (has {sorted(objects)})"):
+                continue
+            size = size_of(collider["frames"][0][1])
+            for frame, got in objects[name].items():
+                expected = points(collider["frames"][int(frame)][1])
+                got = np.array(got)
+                if check(got.shape == expected.shape, f"{source} {name} frame {frame}: {got.shape} points, "
+                         f"the series has {expected.shape}"):
+                    err = float(np.abs(got - expected).max())
+                    check(err <= 1e-5 * size, f"{source} {name} frame {frame}: Blender's vertices differ from "
+                          f"springy's by {err:.3g} m, over 1e-5 of its size {size:.3g} m")
+                    print(f"  {source} {name} frame {frame}: largest difference {err:.2g} m = {err / size:.2g} of its size")
+
+
+def compare_blender_bodies(bodies, blender):
     order = sorted(bodies)
     for source in ("obj", "glb"):
         if source not in blender:
@@ -217,9 +280,13 @@ def main():
     if mode == "pvd":
         compare_pvd(sys.argv[2], sys.argv[3], float(sys.argv[4]))
     elif mode == "blender":
-        compare_blender(sys.argv[2], sys.argv[3])
+        rest = sys.argv[4:]
+        heights = [tuple(rest[i + 1:i + 4]) for i in range(0, len(rest), 4) if rest[i] == "--height"]
+        compare_blender(sys.argv[2], sys.argv[3], heights)
+    elif mode == "colliders":
+        compare_colliders(sys.argv[2])
     else:
-        raise SystemExit("usage: export_compare.py pvd|blender ...")
+        raise SystemExit("usage: export_compare.py pvd|blender|colliders ...")
     if failures:
         print(f"{len(failures)} checks failed")
         sys.exit(1)

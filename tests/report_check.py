@@ -8,10 +8,13 @@
   replay      with --replay REPLAY.js PC2 FPS: the 3D replay's frames, decoded as the viewer
               decodes them (base64, zlib, sums of 32-bit changes, times each body's quantum),
               equal the point cache `springy export` wrote of the same run at every kept frame,
-              within half a quantum (plus the cache's float32 rounding)
+              within half a quantum (plus the cache's float32 rounding); a collider or prop that
+              moves: its mesh at rest placed by its pose at each kept frame (translation and
+              quaternion, as three.js places it) equals its own point cache (PC2's NAME.collider0.pc2
+              beside it) within 1e-6 m; --replay may be given more than once
   size        with --max-bytes N: the report's files but its videos (.mp4) take at most N bytes
 
-usage: report_check.py REPORT_DIR [--replay REPLAY.js PC2 FPS] [--max-bytes N]
+usage: report_check.py REPORT_DIR [--replay REPLAY.js PC2 FPS]... [--max-bytes N]
 """
 import argparse
 import base64
@@ -127,10 +130,7 @@ def check_replay(replay, pc2, fps):
     points = sum(b["vertices"] for b in data["bodies"])
     frames = data["frames"]
     check(len(deltas) == 3 * points * frames, f"replay: {frames} frames of {points} points")
-    with open(pc2, "rb") as f:
-        header = f.read(32)
-        _, _, count, _, _, samples = struct.unpack("<12siiffi", header)
-        cache = f.read()
+    count, samples, cache = read_pc2(pc2)
     check(count == points, f"replay: the point cache has the same {count} points")
     stride = round(fps / data["fps"])
     check(stride >= 1 and abs(fps / stride - data["fps"]) < 1e-9 and (frames - 1) * stride < samples,
@@ -148,6 +148,49 @@ def check_replay(replay, pc2, fps):
             err = abs(x - row[i]) / (0.5 * quanta[i] + 2.0 ** -22 * abs(row[i]))
             worst = max(worst, err)
     check(worst <= 1.0, f"replay: every position within half a quantum of the point cache (worst {worst:.3f} of the bound)")
+    check_moving(data, pc2, stride)
+
+
+def read_pc2(path):
+    """(points, samples, the floats of every sample)"""
+    with open(path, "rb") as f:
+        _, _, count, _, _, samples = struct.unpack("<12siiffi", f.read(32))
+        cache = f.read()
+    return count, samples, cache
+
+
+def rotated(q, v):
+    """v turned by the unit quaternion q = (x, y, z, w)."""
+    x, y, z, w = q
+    # v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z)
+    c = (y * v[2] - z * v[1], z * v[0] - x * v[2], x * v[1] - y * v[0])
+    cc = (y * c[2] - z * c[1], z * c[0] - x * c[2], x * c[1] - y * c[0])
+    return [v[i] + 2 * w * c[i] + 2 * cc[i] for i in range(3)]
+
+
+def check_moving(data, pc2, stride):
+    """Each moving collider's or prop's mesh, placed by its poses, against its own point cache."""
+    moving = [s for s in data["stills"] if "translations" in s]
+    for s in moving:
+        name = s["name"].replace(" ", "")
+        frames = data["frames"]
+        xyz = struct.unpack(f"<{len(base64.b64decode(s['xyz'])) // 4}f", base64.b64decode(s["xyz"]))
+        t = struct.unpack(f"<{3 * frames}f", base64.b64decode(s["translations"]))
+        r = struct.unpack(f"<{4 * frames}f", base64.b64decode(s["rotations"])) if "rotations" in s else None
+        count, samples, cache = read_pc2(pc2[:-len(".pc2")] + "." + name + ".pc2")
+        check(count == len(xyz) // 3, f"replay: {s['name']} has {count} points, as its point cache")
+        worst, moved = 0.0, 0.0
+        for k in range(frames):
+            row = struct.unpack_from(f"<{3 * count}f", cache, 12 * count * k * stride)
+            q = r[4 * k:4 * k + 4] if r else (0.0, 0.0, 0.0, 1.0)
+            for i in range(count):
+                p = rotated(q, xyz[3 * i:3 * i + 3])
+                for c in range(3):
+                    worst = max(worst, abs(p[c] + t[3 * k + c] - row[3 * i + c]))
+                    moved = max(moved, abs(row[3 * i + c] - xyz[3 * i + c]))
+        check(worst <= 1e-6, f"replay: {s['name']} placed by its poses at {frames} frames equals its point cache "
+              f"(worst {worst:.2g} m)")
+        check(moved > 0.01, f"replay: {s['name']} moves ({moved:.3g} m at most)")
 
 
 def check_size(root, most):
@@ -160,12 +203,12 @@ def check_size(root, most):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("report")
-    parser.add_argument("--replay", nargs=3, metavar=("REPLAY", "PC2", "FPS"))
+    parser.add_argument("--replay", nargs=3, metavar=("REPLAY", "PC2", "FPS"), action="append", default=[])
     parser.add_argument("--max-bytes", type=int)
     a = parser.parse_args()
     check_pages(a.report)
-    if a.replay:
-        check_replay(a.replay[0], a.replay[1], float(a.replay[2]))
+    for replay, pc2, fps in a.replay:
+        check_replay(replay, pc2, float(fps))
     if a.max_bytes:
         check_size(a.report, a.max_bytes)
     if failures:

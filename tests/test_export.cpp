@@ -1,7 +1,9 @@
 // springy export and check --export (issue 42), the command-line side: the same bytes on any
 // thread count, memory that does not grow with the run's frames, outputs that appear complete or
 // not at all (a full disk, Ctrl-C, a failed run), and clear errors for a bad extension or an
-// unwritable place. What other programs read in the files is tests/export_roundtrip.sh's part.
+// unwritable place; a collider that moves (issue 58) where its motion has it in every format, read
+// back here (.glb, .pvd and its .vtu, .pc2) against sim/motion.h. What other programs read in the
+// files is tests/export_roundtrip.sh's part.
 #include <gtest/gtest.h>
 
 #include <signal.h>
@@ -11,10 +13,14 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "scene/scene.h"
 #include "springy_process.h"
 
 namespace {
@@ -27,6 +33,8 @@ using springy::test::Springy;
 const std::string kScene = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/export/roundtrip.toml";
 const std::string kThreads = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/export/threads.toml";
 const std::string kUnstable = std::string(SPRINGY_SOURCE_DIR) + "/tests/data/app/unstable.toml";
+// A plate (triangle collider 0) that comes down on a ball from 0.3 s to 1.5 s and holds to 2.2 s.
+const std::string kPress = std::string(SPRINGY_SOURCE_DIR) + "/scenes/press.toml";
 // The scene's drawn vertices: two icospheres of 42 and the bunny's own 1839 (scenes/assets/bunny.ply).
 constexpr int32_t kDrawnVertices = 42 + 42 + 1839;
 
@@ -38,6 +46,90 @@ std::string readFile(const fs::path& path) {
 }
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// A .glb read back: its JSON chunk and its binary chunk.
+struct Glb {
+  nlohmann::json doc;
+  std::string bin;
+  // Accessor `a`'s floats, through its buffer view.
+  std::vector<float> floats(std::size_t a) const {
+    const nlohmann::json& accessor = doc["accessors"][a];
+    const nlohmann::json& view = doc["bufferViews"][accessor["bufferView"].get<std::size_t>()];
+    const std::string type = accessor["type"];
+    const std::size_t components = type == "SCALAR" ? 1 : type == "VEC3" ? 3 : 4;
+    std::vector<float> out(accessor["count"].get<std::size_t>() * components);
+    const std::size_t at = view["byteOffset"].get<std::size_t>() + accessor.value("byteOffset", std::size_t{0});
+    EXPECT_LE(at + 4 * out.size(), bin.size());
+    if (at + 4 * out.size() <= bin.size()) std::memcpy(out.data(), bin.data() + at, 4 * out.size());
+    return out;
+  }
+  std::size_t node(const std::string& name) const {
+    for (std::size_t n = 0; n < doc["nodes"].size(); ++n) {
+      if (doc["nodes"][n]["name"] == name) return n;
+    }
+    ADD_FAILURE() << "no node " << name;
+    return 0;
+  }
+};
+Glb readGlb(const fs::path& path) {
+  const std::string bytes = readFile(path);
+  Glb g;
+  uint32_t length = 0;
+  if (bytes.size() < 28 || bytes.compare(0, 4, "glTF") != 0) return ADD_FAILURE() << path << " is no GLB", g;
+  std::memcpy(&length, bytes.data() + 12, 4);
+  g.doc = nlohmann::json::parse(bytes.substr(20, length));
+  const std::size_t bin = 20 + length;
+  std::memcpy(&length, bytes.data() + bin, 4);
+  g.bin = bytes.substr(bin + 8, length);
+  return g;
+}
+
+// A .pvd's data sets: time, group, part, name, file.
+struct DataSet {
+  double time;
+  std::string group, part, name, file;
+};
+std::vector<DataSet> readPvd(const fs::path& path) {
+  const std::string text = readFile(path);
+  const std::regex item(R"re(<DataSet timestep="([^"]*)" group="([^"]*)" part="([^"]*)" name="([^"]*)" file="([^"]*)"/>)re");
+  std::vector<DataSet> out;
+  for (auto m = std::sregex_iterator(text.begin(), text.end(), item); m != std::sregex_iterator(); ++m) {
+    out.push_back({std::stod((*m)[1]), (*m)[2], (*m)[3], (*m)[4], (*m)[5]});
+  }
+  return out;
+}
+
+// The points of a .vtu springy wrote (appended raw, UInt64 headers, Float64 positions).
+std::vector<springy::Vec3> vtuPoints(const fs::path& path) {
+  const std::string text = readFile(path);
+  std::smatch m;
+  const std::regex position(R"re(Name="position" NumberOfComponents="3" format="appended" offset="(\d+)")re");
+  const std::string mark = "<AppendedData encoding=\"raw\">\n_";
+  if (!std::regex_search(text, m, position) || !contains(text, mark)) return ADD_FAILURE() << path, std::vector<springy::Vec3>{};
+  const std::size_t at = text.find(mark) + mark.size() + std::stoull(m[1]);
+  uint64_t bytes = 0;
+  std::memcpy(&bytes, text.data() + at, 8);
+  std::vector<springy::Vec3> out(bytes / 24);
+  for (std::size_t k = 0; k < out.size(); ++k) std::memcpy(&out[k].x, text.data() + at + 8 + 24 * k, 24);
+  return out;
+}
+
+// Sample k of a .pc2 file: its points.
+std::vector<springy::Vec3> pc2Sample(const fs::path& path, int32_t k) {
+  const std::string cache = readFile(path);
+  int32_t points = 0, samples = 0;
+  std::memcpy(&points, cache.data() + 16, 4);
+  std::memcpy(&samples, cache.data() + 28, 4);
+  EXPECT_LT(k, samples) << path;
+  EXPECT_EQ(cache.size(), 32u + 12u * static_cast<std::size_t>(points) * static_cast<std::size_t>(samples)) << path;
+  std::vector<springy::Vec3> out(static_cast<std::size_t>(points));
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    float p[3];
+    std::memcpy(p, cache.data() + 32 + 12 * (static_cast<std::size_t>(k) * out.size() + i), 12);
+    out[i] = {p[0], p[1], p[2]};
+  }
+  return out;
+}
 
 class ExportTest : public ::testing::Test {
  protected:
@@ -124,6 +216,143 @@ TEST_F(ExportTest, ThePointCacheHoldsEveryFrameOfTheDrawnMeshes) {
   for (std::size_t at = obj.find("\nv "); at != std::string::npos; at = obj.find("\nv ", at + 1)) ++vertices;
   EXPECT_EQ(vertices, static_cast<std::size_t>(kDrawnVertices));
   EXPECT_TRUE(contains(r.output, "exported: " + out.string())) << r.output;
+}
+
+// The press's plate, 2 s of it at 30 frames a second: each format carries its pose at every frame,
+// at the frame's simulated time (the .pvd's times: the step nearest to k / 30), as the scene's
+// motion gives it.
+class MovingExportTest : public ExportTest {
+ protected:
+  void SetUp() override {
+    ExportTest::SetUp();
+    for (const std::string& format : kFormats) {
+      const Result r = run({"export", kPress, "-o", (dir_ / ("press." + format)).string(), "--duration", "2"});
+      ASSERT_EQ(r.status, 0) << r.output;
+      output_ += r.output;
+    }
+    for (const DataSet& d : readPvd(dir_ / "press.pvd")) {
+      if (d.group == "colliders") plate_.push_back(d);
+    }
+    ASSERT_EQ(plate_.size(), kFrames) << "the plate's series in press.pvd";
+  }
+  // Where the plate's motion has its vertex p at frame k, and the node's translation then.
+  springy::Vec3 placed(const springy::Vec3& p, std::size_t k) const { return motion().pose(plate_[k].time).apply(p); }
+  const springy::Movement& motion() const { return scene_.triangleColliders[0].motion; }
+  void checkGlb();
+  void checkPvd();
+  void checkPc2();
+
+  static constexpr std::size_t kFrames = 61;
+  // The first, two on the way down, one held at the bottom (1.5-2.2 s), the last.
+  const std::vector<std::size_t> frames_{0, 15, 30, 45, 60};
+  const springy::SceneDesc scene_ = springy::loadScene(kPress);
+  std::vector<DataSet> plate_;
+  std::string output_;
+};
+
+void MovingExportTest::checkGlb() {
+  const Glb g = readGlb(dir_ / "press.glb");
+  const std::size_t node = g.node("collider 0");
+  std::optional<std::size_t> sampler;
+  const nlohmann::json& animation = g.doc["animations"][0];
+  for (const nlohmann::json& c : animation["channels"]) {
+    if (c["target"]["node"] == node) {
+      EXPECT_EQ(c["target"]["path"], "translation") << "the plate only moves: no rotation";
+      sampler = c["sampler"].get<std::size_t>();
+    }
+  }
+  ASSERT_TRUE(sampler) << "no channel animates the plate's node";
+  const nlohmann::json& s = animation["samplers"][*sampler];
+  EXPECT_EQ(s["interpolation"], "LINEAR");
+  const std::vector<float> times = g.floats(s["input"]), translation = g.floats(s["output"]);
+  ASSERT_EQ(times.size(), kFrames);
+  ASSERT_EQ(translation.size(), 3 * kFrames);
+  for (std::size_t k : frames_) {
+    EXPECT_FLOAT_EQ(times[k], static_cast<float>(static_cast<double>(k) / 30.0));
+    const springy::Vec3 expected = placed({0, 0, 0}, k);
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(translation[3 * k + c], expected[c], 1e-6) << "frame " << k << " at " << plate_[k].time << " s";
+    }
+  }
+  EXPECT_NEAR(translation[3 * 45 + 1], -0.7, 1e-6) << "held at the bottom";
+  EXPECT_NEAR(translation[3 * 15 + 1], motion().translation(plate_[15].time).y, 1e-6);
+  EXPECT_LT(translation[3 * 15 + 1], -0.01) << "on its way down at 0.5 s";
+  // The node stands at the first frame's pose; its mesh is the plate at rest; nothing else moves.
+  EXPECT_EQ(g.doc["nodes"][node]["translation"], nlohmann::json::array({0.0, 0.0, 0.0}));
+  const std::vector<float> rest = g.floats(g.doc["meshes"][g.doc["nodes"][node]["mesh"].get<std::size_t>()]["primitives"][0]["attributes"]["POSITION"]);
+  ASSERT_EQ(rest.size(), 3 * scene_.triangleColliders[0].mesh.positions.size());
+  EXPECT_FLOAT_EQ(rest[1], 1.2f);
+  for (const std::string name : {"ball", "plane 0"}) EXPECT_FALSE(g.doc["nodes"][g.node(name)].contains("translation")) << name;
+}
+
+void MovingExportTest::checkPvd() {
+  const std::vector<springy::Vec3>& rest = scene_.triangleColliders[0].mesh.positions;
+  std::size_t bodies = 0;
+  for (const DataSet& d : readPvd(dir_ / "press.pvd")) bodies += d.group.empty();
+  EXPECT_EQ(bodies, kFrames) << "the ball's series";
+  for (std::size_t k : frames_) {
+    const DataSet& d = plate_[k];
+    EXPECT_EQ(d.name, "collider 0");
+    EXPECT_EQ(d.part, "1");
+    EXPECT_EQ(d.file, "press/collider0_" + std::string(6 - std::to_string(k).size(), '0') + std::to_string(k) + ".vtu");
+    EXPECT_NEAR(d.time, static_cast<double>(k) / 30.0, 0.5 / 30.0);
+    const std::vector<springy::Vec3> points = vtuPoints(dir_ / d.file);
+    ASSERT_EQ(points.size(), rest.size()) << d.file;
+    for (std::size_t i = 0; i < rest.size(); ++i) {
+      EXPECT_LT(length(points[i] - placed(rest[i], k)), 1e-12) << d.file << " point " << i;
+    }
+    EXPECT_NEAR(points[0].y - rest[0].y, motion().translation(d.time).y, 1e-12) << d.file;
+  }
+  EXPECT_NEAR(vtuPoints(dir_ / plate_[45].file)[0].y, 0.5, 1e-12) << "the plate's underside at the bottom";
+}
+
+void MovingExportTest::checkPc2() {
+  const std::vector<springy::Vec3>& rest = scene_.triangleColliders[0].mesh.positions;
+  const fs::path cache = dir_ / "press.collider0.pc2";
+  ASSERT_TRUE(fs::exists(cache)) << listingText(dir_);
+  for (std::size_t k : frames_) {
+    const std::vector<springy::Vec3> points = pc2Sample(cache, static_cast<int32_t>(k));
+    ASSERT_EQ(points.size(), rest.size());
+    for (std::size_t i = 0; i < rest.size(); ++i) {
+      EXPECT_LT(length(points[i] - placed(rest[i], k)), 1e-6) << "frame " << k << " point " << i;
+    }
+  }
+  // The body's cache is as before: the ball's 642 points; the OBJ has the plate as an object.
+  EXPECT_EQ(pc2Sample(dir_ / "press.pc2", 0).size(), 642u);
+  const std::string obj = readFile(dir_ / "press.obj");
+  EXPECT_TRUE(contains(obj, "\no springy\n") && contains(obj, "\no collider0\n")) << obj.substr(0, 400);
+  EXPECT_TRUE(contains(readFile(dir_ / "press.mtl"), "newmtl collider0\n"));
+  EXPECT_TRUE(contains(output_, "press.obj, " + cache.string() + " and ")) << output_;
+}
+
+TEST_F(MovingExportTest, ThePressPlateMovesInEveryFormat) {
+  {
+    SCOPED_TRACE("press.glb");
+    checkGlb();
+  }
+  {
+    SCOPED_TRACE("press.pvd");
+    checkPvd();
+  }
+  {
+    SCOPED_TRACE("press.pc2");
+    checkPc2();
+  }
+}
+
+TEST_F(ExportTest, AStillSceneHasNoPoses) {
+  // Nothing moves in the round trip's scene: no node placed, no collider series, no other cache.
+  for (const std::string& format : kFormats) {
+    const Result r = run({"export", kScene, "-o", (dir_ / ("run." + format)).string(), "--duration", "0.2"});
+    ASSERT_EQ(r.status, 0) << r.output;
+  }
+  const Glb g = readGlb(dir_ / "run.glb");
+  for (const nlohmann::json& n : g.doc["nodes"]) EXPECT_FALSE(n.contains("translation")) << n.dump();
+  for (const nlohmann::json& c : g.doc["animations"][0]["channels"]) EXPECT_EQ(c["target"]["path"], "weights");
+  for (const DataSet& d : readPvd(dir_ / "run.pvd")) EXPECT_EQ(d.group, "") << d.file;
+  std::size_t caches = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) caches += e.path().extension() == ".pc2";
+  EXPECT_EQ(caches, 1u) << listingText(dir_);
 }
 
 TEST_F(ExportTest, MemoryDoesNotGrowWithTheFrames) {

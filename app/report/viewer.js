@@ -5,11 +5,13 @@
 // with the class "springy-replay": orbit with the mouse, play, pause and seek with the slider;
 // "follow the video" keeps the replay at the video's time.
 //
-// For tests and scripts, window.springyViewer holds { ready, frame, framesDrawn, error }.
+// For tests and scripts, window.springyViewer holds { ready, frame, framesDrawn, error, moving }:
+// moving is, per collider or prop that moves, its mesh's position and quaternion at the frame
+// shown ([x, y, z, qx, qy, qz, qw]).
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 
-const state = { ready: false, frame: -1, framesDrawn: 0, error: null };
+const state = { ready: false, frame: -1, framesDrawn: 0, error: null, moving: [] };
 window.springyViewer = state;
 
 function bytesOf(base64) {
@@ -77,6 +79,7 @@ async function mount(root, data, motionBase64) {
   scene.add(sun, sun.target);
 
   const meshes = [];
+  const moving = [];
   const box = new THREE.Box3();
   let offset = 0;
   for (const b of data.bodies) {
@@ -105,7 +108,17 @@ async function mount(root, data, motionBase64) {
     const material = new THREE.MeshStandardMaterial({
       color: colorOf(s.color), roughness: 0.9, side: THREE.DoubleSide, transparent: s.alpha < 1, opacity: s.alpha,
     });
-    scene.add(new THREE.Mesh(geometry, material));
+    const mesh = new THREE.Mesh(geometry, material);
+    scene.add(mesh);
+    if (s.translations) {
+      // A collider or prop that moves: its mesh at rest, placed at each frame by its pose.
+      const floats = (base64) => new Float32Array(bytesOf(base64).buffer);
+      const m = { mesh, translations: floats(s.translations), rotations: s.rotations ? floats(s.rotations) : null };
+      if (m.translations.length !== 3 * data.frames || (m.rotations && m.rotations.length !== 4 * data.frames)) {
+        throw new Error(`replay: ${s.name} has poses for ${m.translations.length / 3} frames, expected ${data.frames}`);
+      }
+      moving.push(m);
+    }
   }
 
   // The scene's camera where it gives one, else a view of the bodies from the front and above.
@@ -136,6 +149,11 @@ async function mount(root, data, motionBase64) {
         m.attribute.needsUpdate = true;
         m.geometry.computeVertexNormals();
       }
+      for (const m of moving) {
+        m.mesh.position.fromArray(m.translations, 3 * f);
+        if (m.rotations) m.mesh.quaternion.fromArray(m.rotations, 4 * f);
+      }
+      state.moving = moving.map((m) => m.mesh.position.toArray().concat(m.mesh.quaternion.toArray()));
       slider.value = String(f);
       label.textContent = `${(f / data.fps).toFixed(2)} s`;
     }

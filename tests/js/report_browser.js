@@ -3,7 +3,9 @@
 //   every page: no console error, no page error, no failed request; every image decoded
 //   (naturalWidth > 0); every link to a page opens it
 //   a scene's page: the video plays past 6 s and its frame is drawn (not one colour); the 3D
-//   replay draws a canvas that is not empty, and seeking it to the last frame changes the picture
+//   replay draws a canvas that is not empty, and seeking it to the last frame changes the picture;
+//   where a collider moves (the press's plate), seeking moves its mesh as its poses say; at least
+//   one page has one
 // usage: node report_browser.js REPORT_DIR
 "use strict";
 const fs = require("fs");
@@ -126,6 +128,44 @@ async function checkScenePage(page, name) {
   await page.waitForFunction((f) => window.springyViewer.frame === f - 1, frames, { timeout: 5000 });
   const last = await pixelStats(page, ".springy-replay-canvas canvas");
   check(last.hash !== first.hash, `${name}: the 3D replay's last frame (${frames - 1}) differs from its first`);
+  return checkMoving(page, name, frames);
+}
+
+// Seeks the replay to frame f; the viewer's state then.
+async function seek(page, f) {
+  await page.evaluate((f) => {
+    const s = document.querySelector(".springy-replay-time");
+    s.value = String(f);
+    s.dispatchEvent(new Event("input"));
+  }, f);
+  await page.waitForFunction((f) => window.springyViewer.frame === f, f, { timeout: 5000 });
+  return page.evaluate(() => window.springyViewer);
+}
+
+// The colliders and props that move: at frames 0 and a quarter of the way, each mesh stands where
+// the replay's data put it (translation, quaternion), and somewhere the two differ. True when the
+// page has one.
+async function checkMoving(page, name, frames) {
+  const poses = await page.evaluate(() => window.springyReplayData.stills.filter((s) => s.translations).map((s) => {
+    const floats = (b) => Array.from(new Float32Array(Uint8Array.from(atob(b), (c) => c.charCodeAt(0)).buffer));
+    return { name: s.name, t: floats(s.translations), r: s.rotations ? floats(s.rotations) : null };
+  }));
+  if (poses.length === 0) return false;
+  const at = [0, Math.floor(frames / 4)];
+  const seen = [];
+  for (const f of at) {
+    const viewer = await seek(page, f);
+    check(viewer.moving.length === poses.length, `${name}: ${viewer.moving.length} moving meshes in the viewer at frame ${f}`);
+    poses.forEach((p, i) => {
+      const want = p.t.slice(3 * f, 3 * f + 3).concat(p.r ? p.r.slice(4 * f, 4 * f + 4) : [0, 0, 0, 1]);
+      const got = viewer.moving[i] || [];
+      check(want.every((v, k) => Math.abs(v - got[k]) < 1e-6), `${name}: ${p.name} at frame ${f} is at [${got.map((v) => v.toFixed(3))}], its pose`);
+    });
+    seen.push(viewer.moving);
+  }
+  const moved = seen[0].some((m, i) => m.some((v, k) => Math.abs(v - seen[1][i][k]) > 1e-3));
+  check(moved, `${name}: the moving meshes stand elsewhere at frame ${at[1]} than at frame 0`);
+  return true;
 }
 
 (async () => {
@@ -136,7 +176,7 @@ async function checkScenePage(page, name) {
   try {
     const queue = [path.join(root, "index.html")];
     const seen = new Set();
-    let scenes = 0;
+    let scenes = 0, moving = 0;
     while (queue.length) {
       const file = queue.shift();
       if (seen.has(file)) continue;
@@ -147,7 +187,7 @@ async function checkScenePage(page, name) {
       for (const p of await checkLinks(page, file, name)) queue.push(p);
       if (await page.$(".springy-replay")) {
         ++scenes;
-        await checkScenePage(page, name);
+        if (await checkScenePage(page, name)) ++moving;
       }
       await page.waitForTimeout(100);
       for (const p of problems) check(false, `${name}: ${p}`);
@@ -155,6 +195,7 @@ async function checkScenePage(page, name) {
       await page.close();
     }
     check(scenes > 0, `${scenes} scene pages with a video and a 3D replay`);
+    check(moving > 0, `${moving} scene pages whose replay moves a collider (report_test.sh reports the press)`);
     console.log(`${seen.size} pages opened`);
   } finally {
     await browser.close();

@@ -244,7 +244,7 @@ void vertexFields(const ExportBody& body, const World& world, VertexFields& out)
     float& b = strain[st.j - info.firstVertex];
     a = std::max(a, e), b = std::max(b, e);
   }
-  const auto pinned = [&](uint32_t i) -> uint8_t { return model.invMass[i] == 0.0 ? 1 : 0; };
+  const auto pinned = [&](uint32_t i) -> uint8_t { return world.inverseMasses()[i] == 0.0 ? 1 : 0; };
   const std::size_t n = body.vertexCount();
   out.velocity.resize(3 * n);
   out.strain.resize(n);

@@ -157,7 +157,7 @@ AccuracyCase sceneAccuracy(const std::string& path) {
       world.step();
       double lowest = INFINITY;
       for (std::size_t i = 0; i < world.positions().size(); ++i) {
-        if (world.model().invMass[i] != 0.0) lowest = std::min(lowest, dot(world.positions()[i], up));
+        if (world.inverseMasses()[i] != 0.0) lowest = std::min(lowest, dot(world.positions()[i], up));
       }
       if (lowest <= top + 0.01 * model.bodies[0].restSize) {
         contact = world.time();

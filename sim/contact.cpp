@@ -141,7 +141,7 @@ void BodyContacts::addStatics() {
   }
 }
 
-BodyContacts::BodyContacts(const Model& model) : model_(&model) {
+BodyContacts::BodyContacts(const Model& model) : model_(&model), invMass_(model.invMass.data()) {
   vertexCount_ = static_cast<uint32_t>(model.vertexCount());
   addStatics();
   const std::size_t n = vertexCount_ + staticPosition_.size();

@@ -101,6 +101,9 @@ class BodyContacts {
   static bool needed(const Model& model);
   // Reads `model` (which must outlive this object and not move).
   explicit BodyContacts(const Model& model);
+  // The inverse masses the impulses use (the World's, which a pin's release changes); they must
+  // outlive this object.
+  void setInverseMasses(const double* invMass) { invMass_ = invMass; }
 
   // Resolves the contacts of the step from x0 to x1 of length dt: corrects x1 and v1 in place.
   // Returns whether anything changed.
@@ -178,7 +181,7 @@ class BodyContacts {
     if (i >= vertexCount_) return {staticPosition_[i - vertexCount_], staticPosition_[i - vertexCount_]};
     return {x0[i], x0[i] + u_[i] * dt};
   }
-  double inverseMass(uint32_t i) const { return i < vertexCount_ ? model_->invMass[i] : 0.0; }
+  double inverseMass(uint32_t i) const { return i < vertexCount_ ? invMass_[i] : 0.0; }
   void addStatics();
   // Steps of the constructor. Body b takes part: its edges and its thickness.
   void addActive(uint32_t b);
@@ -256,6 +259,7 @@ class BodyContacts {
   bool impulse(const Contact& c, double dt, bool impact);
 
   const Model* model_;
+  const double* invMass_;  // the World's (setInverseMasses), the model's until set
   std::vector<Body> bodies_;
   std::vector<uint32_t> active_;  // bodies that take part, in order
   std::vector<Static> statics_;

@@ -67,8 +67,9 @@ struct ForceKind {
   // vertex-local kind's term on vertex i: adds to the force f and the block H.
   void (*vbdElement)(const VbdCall&, std::size_t element, int slot, Vec3& f, Sym3& H) = nullptr;
   void (*vbdVertex)(const VbdCall&, uint32_t vertex, Vec3& f, Sym3& H) = nullptr;
-  // Adds its rates to body b's rows (rows[k]: the body's vertex firstVertex + k) at positions x.
-  void (*boundRows)(const Model&, const Vec3* x, uint32_t body, RowBound* rows) = nullptr;
+  // Adds its rates to body b's rows (rows[k]: the body's vertex firstVertex + k) at positions x,
+  // with the inverse masses invMass (a run's: its released pins move).
+  void (*boundRows)(const Model&, const Vec3* x, const double* invMass, uint32_t body, RowBound* rows) = nullptr;
 };
 
 // Every kind, in evaluation order: forceKinds()[k].stage is ForceStage value k.

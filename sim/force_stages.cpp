@@ -8,7 +8,7 @@
 
 namespace springy {
 
-Forces::Forces(const Model& model) : model_(&model) {
+Forces::Forces(const Model& model) : model_(&model), invMass_(model.invMass.data()) {
   // The stages' data: the hinges' constants, the gas bodies' face chunks, the damped bodies'
   // vertex chunks.
   data_.hingeTerms.reserve(model_->hinges.size());
@@ -191,7 +191,7 @@ void Forces::ownedForces(unsigned thread, const Vec3* x, const Vec3* v, const Ve
   prefetchForeign(thread, x, v);
   runStages(share, x, v, air, f);
   if (toAcceleration) {
-    for (std::size_t i = share.begin; i < share.end; ++i) f[i] = f[i] * model_->invMass[i];  // pinned: invMass 0
+    for (std::size_t i = share.begin; i < share.end; ++i) f[i] = f[i] * invMass_[i];  // pinned: invMass 0
   }
 }
 
@@ -232,7 +232,7 @@ void Forces::accelerations(const Vec3* x, const Vec3* v, double t, Vec3* a) cons
   }
   evaluate(x, v, t, a);
   const std::size_t n = model_->vertexCount();
-  for (std::size_t i = 0; i < n; ++i) a[i] = a[i] * model_->invMass[i];  // pinned: invMass 0
+  for (std::size_t i = 0; i < n; ++i) a[i] = a[i] * invMass_[i];  // pinned: invMass 0
 }
 
 }  // namespace springy

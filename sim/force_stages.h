@@ -39,6 +39,10 @@ class Forces {
 
   const std::vector<ForceStage>& stages() const { return stages_; }
   const Model& model() const { return *model_; }
+  // The inverse masses accelerations() divides by (the World's, which a pin's release changes;
+  // the model's until set), and must outlive this object.
+  void setInverseMasses(const double* invMass) { invMass_ = invMass; }
+  const double* inverseMasses() const { return invMass_; }
 
   // Up to `requested` threads (the calling thread included), fewer when the model has under
   // `minVerticesPerThread` vertices per thread (see World::kMinVerticesPerThread).
@@ -89,6 +93,7 @@ class Forces {
   };
 
   const Model* model_;
+  const double* invMass_;
   std::vector<ForceStage> stages_;
   mutable StageData data_;  // the per-evaluation parts change in prepare()
   struct VolumeChunk {

@@ -299,10 +299,10 @@ void dragVbdTerm(const VbdCall& call, uint32_t i, Vec3& f, Sym3& H) {
   H.addDiagonal(c * call.invH);
 }
 
-void gasBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows) {
+void gasBoundRows(const Model& model, const Vec3* x, const double* invMass, uint32_t body, RowBound* rows) {
   const BodyInfo& info = model.bodies[body];
   if (!(info.gasPressure > 0.0)) return;
-  const double sum = volumeModeSum(model, info, x);
+  const double sum = volumeModeSum(model, info, x, invMass);
   const double volume = enclosedVolume(model, body, x);
   const double w2 = volume > 0.0 ? info.gasPressure * info.restVolume / (volume * volume) * sum : 0.0;
   for (uint32_t k = 0; k < info.vertexCount; ++k) rows[k].gasStiffness = w2;

@@ -110,6 +110,6 @@ void applyDeformationDamping(const Model& model, const RigidMotion* rigid, std::
 double dragDamping(const Model& model, uint32_t vertex);
 double deformationDiagonal(const Model& model, uint32_t vertex);
 void dragVbdTerm(const VbdCall& call, uint32_t vertex, Vec3& f, Sym3& H);
-void gasBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows);
+void gasBoundRows(const Model& model, const Vec3* x, const double* invMass, uint32_t body, RowBound* rows);
 
 }  // namespace springy

@@ -424,9 +424,8 @@ void hingeVbdTerm(const VbdCall& call, std::size_t hinge, int slot, Vec3& f, Sym
   H.addOuter(g.grad[slot], hg.stiffness + hg.damping * call.invH);
 }
 
-void hingeBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows) {
+void hingeBoundRows(const Model& model, const Vec3* x, const double* invMass, uint32_t body, RowBound* rows) {
   const BodyInfo& info = model.bodies[body];
-  const double* invMass = model.invMass.data();
   HingeGeometry g;
   for (uint32_t h = info.firstHinge; h < info.firstHinge + info.hingeCount; ++h) {
     const Hinge& hg = model.hinges[h];

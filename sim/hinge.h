@@ -104,6 +104,6 @@ bool hingeBlocks(const Model& model, std::size_t hinge, const Vec3* x, const Vec
 // Gauss-Newton block (k + d / h) g g^T of that vertex's g = d theta / d x.
 void hingeVbdTerm(const VbdCall& call, std::size_t hinge, int slot, Vec3& f, Sym3& H);
 // Gershgorin rows: k and d times w_a sum_b w_b, w = |g| / sqrt(m) (0 for a pinned vertex).
-void hingeBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows);
+void hingeBoundRows(const Model& model, const Vec3* x, const double* invMass, uint32_t body, RowBound* rows);
 
 }  // namespace springy

@@ -77,9 +77,6 @@ ImplicitSolver::ImplicitSolver(const Model& model, ImplicitSettings settings) : 
   vSaved_.assign(static_cast<std::size_t>(settings_.maxHalvings), std::vector<Vec3>(n_));
   contactNormal_.assign(n_, Vec3{});
   contactSpeed_.assign(n_, 0.0);
-  for (std::size_t i = 0; i < n_; ++i) {
-    for (int c = 0; c < 3; ++c) filter_(static_cast<Eigen::Index>(3 * i) + c) = model.invMass[i] == 0.0 ? 0.0 : 1.0;
-  }
 }
 
 ImplicitSolver::Block ImplicitSolver::findBlock(uint32_t a, uint32_t b) const {
@@ -168,10 +165,11 @@ void ImplicitSolver::findContacts(const Forces& forces, const std::vector<Vec3>&
   const Model& model = forces.model();
   if (model.colliders.empty()) return;
   forces.evaluate(x0.data(), v0_.data(), t, f_.data());
+  const double* invMass = forces.inverseMasses();
   ContactHit hit;
   for (uint32_t i = 0; i < n_; ++i) {
-    if (model.invMass[i] == 0.0) continue;
-    const Vec3 predicted = x0[i] + (v0_[i] + f_[i] * (model.invMass[i] * dt)) * dt;
+    if (invMass[i] == 0.0) continue;
+    const Vec3 predicted = x0[i] + (v0_[i] + f_[i] * (invMass[i] * dt)) * dt;
     if (!model.colliders.firstHit(x0[i], predicted, hit)) continue;
     contacts_.push_back(i);
     contactNormal_[i] = hit.normal;
@@ -223,6 +221,11 @@ int ImplicitSolver::solveCg(double absoluteFloor) {
 
 bool ImplicitSolver::step(const Forces& forces, std::vector<Vec3>& x, std::vector<Vec3>& v, double t, double dt) {
   ++stats_.steps;
+  // The held vertices' rows filtered out: the pins as they are now (a released pin moves).
+  const double* invMass = forces.inverseMasses();
+  for (std::size_t i = 0; i < n_; ++i) {
+    for (int c = 0; c < 3; ++c) filter_(static_cast<Eigen::Index>(3 * i) + c) = invMass[i] == 0.0 ? 0.0 : 1.0;
+  }
   return stepWithin(forces, x, v, t, dt, 0);
 }
 

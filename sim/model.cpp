@@ -455,11 +455,12 @@ void volumeGradient(const Model& model, const BodyInfo& body, const Vec3* x, Vec
   }
 }
 
-double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x) {
+double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x, const double* invMass) {
+  if (!invMass) invMass = model.invMass.data();
   std::vector<Vec3> g(body.vertexCount);
   volumeGradient(model, body, x, g.data());
   double sum = 0.0;
-  for (uint32_t k = 0; k < body.vertexCount; ++k) sum += lengthSquared(g[k]) * model.invMass[body.firstVertex + k];
+  for (uint32_t k = 0; k < body.vertexCount; ++k) sum += lengthSquared(g[k]) * invMass[body.firstVertex + k];
   return sum;
 }
 

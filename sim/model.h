@@ -248,7 +248,7 @@ double gasPressureFromPeriod(const Model& model, const BodyInfo& body, double pe
 // (body-local) at positions x (global).
 void volumeGradient(const Model& model, const BodyInfo& body, const Vec3* x, Vec3* g);
 // sum_i |dV/dx_i|^2 / m_i over a body's free vertices at positions x [m^4 / kg].
-double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x);
+double volumeModeSum(const Model& model, const BodyInfo& body, const Vec3* x, const double* invMass = nullptr);
 
 // Area share of each vertex of a mesh: each face gives its area to its corners in proportion
 // to the corner's interior angle (angle / pi), docs/model.md §4, eq. A6. Sums to the total

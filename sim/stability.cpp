@@ -11,12 +11,12 @@
 namespace springy {
 namespace {
 
-struct State {
+struct ModeState {
   double x, v;
 };
 
 // One step of each integrator on the scalar mode, mirroring World::step.
-State stepMode(Integrator integrator, double w2, double g, double h, State s) {
+ModeState stepMode(Integrator integrator, double w2, double g, double h, ModeState s) {
   auto a = [&](double x, double v) { return -w2 * x - g * v; };
   switch (integrator) {
     case Integrator::ExplicitEuler: return {s.x + h * s.v, s.v + h * a(s.x, s.v)};
@@ -129,8 +129,8 @@ double amplification(Integrator integrator, double omega, double gamma, double h
   if (integrator == Integrator::VelocityVerlet || integrator == Integrator::AdaptiveVerlet) {
     return verletAmplification(w2, gamma, h);
   }
-  const State c0 = stepMode(integrator, w2, gamma, h, {1, 0});
-  const State c1 = stepMode(integrator, w2, gamma, h, {0, 1});
+  const ModeState c0 = stepMode(integrator, w2, gamma, h, {1, 0});
+  const ModeState c1 = stepMode(integrator, w2, gamma, h, {0, 1});
   // Eigenvalues of [[c0.x, c1.x], [c0.v, c1.v]].
   // ((a - d)/2)^2 + b c rather than tr^2/4 - det: no cancellation when both are near 1.
   const double tr = c0.x + c1.v, det = c0.x * c1.v - c1.x * c0.v;
@@ -171,7 +171,8 @@ double criticalStep(Integrator integrator, double omega, double gamma, double ho
   return lo;
 }
 
-std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t body) {
+std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t body, const double* invMass) {
+  if (!invMass) invMass = model.invMass.data();
   const BodyInfo& info = model.bodies[body];
   const std::vector<ForceStage> stages = stagesOf(model);
   std::vector<RowBound> rows(info.vertexCount);
@@ -182,7 +183,7 @@ std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t
   }
   // Each kind's rates, in the registry's order (sim/force_kinds.h boundRows).
   for (ForceStage stage : stages) {
-    if (const auto bound = forceKind(stage).boundRows) bound(model, x, body, rows.data());
+    if (const auto bound = forceKind(stage).boundRows) bound(model, x, invMass, body, rows.data());
   }
   return rows;
 }
@@ -252,11 +253,11 @@ Integrator contactLimitedIntegrator(const Model& model, uint32_t body, Integrato
 }
 
 StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x, Integrator integrator,
-                                  double horizon) {
+                                  double horizon, const double* invMass) {
   StabilityReport report;
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     BodyStability s =
-        bodyStability(gershgorinRows(model, x.data(), b), contactLimitedIntegrator(model, b, integrator), horizon);
+        bodyStability(gershgorinRows(model, x.data(), b, invMass), contactLimitedIntegrator(model, b, integrator), horizon);
     s.body = b;
     if (s.dtMax < report.dtMax) {
       report.dtMax = s.dtMax;

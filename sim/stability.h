@@ -78,16 +78,18 @@ double amplification(Integrator integrator, double omega, double gamma, double h
 // with neither stiffness nor damping).
 double criticalStep(Integrator integrator, double omega, double gamma, double horizon);
 
-// Gershgorin rows of one body at positions x.
-std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t body);
+// Gershgorin rows of one body at positions x, with inverse masses invMass (null: the model's; a
+// run's once it released pins).
+std::vector<RowBound> gershgorinRows(const Model& model, const Vec3* x, uint32_t body, const double* invMass = nullptr);
 
 // The estimate for one body from its rows.
 BodyStability bodyStability(const std::vector<RowBound>& rows, Integrator integrator, double horizon,
                             const ParameterScale& scale = {});
 
-// The estimate for every body of a model at positions x (its state at t = 0, usually).
+// The estimate for every body of a model at positions x (its state at t = 0, usually), with
+// inverse masses invMass (null: the model's).
 StabilityReport estimateStability(const Model& model, const std::vector<Vec3>& x, Integrator integrator,
-                                  double horizon);
+                                  double horizon, const double* invMass = nullptr);
 
 // The stiffest mode itself, not a bound on it: the largest eigenvalues of M^-1/2 K M^-1/2
 // (omega^2; K = -df/dx at zero velocity) and of M^-1/2 D M^-1/2 (gamma; D = -df/dv), by Lanczos

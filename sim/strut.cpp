@@ -234,12 +234,11 @@ void strutVbdTerm(const VbdCall& call, std::size_t strut, int slot, Vec3& f, Sym
   }
 }
 
-void strutBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows) {
+void strutBoundRows(const Model& model, const Vec3* x, const double* invMass, uint32_t body, RowBound* rows) {
   const BodyInfo& info = model.bodies[body];
   // In products with the inverse masses (0 for a pinned vertex, which adds nothing): this is
   // made again every few steps of an adaptive run, where its divisions and square roots were
   // a fifth of the run.
-  const double* invMass = model.invMass.data();
   for (uint32_t s = info.firstStrut; s < info.firstStrut + info.strutCount; ++s) {
     const Strut& st = model.struts[s];
     // The geometric term |1 - L0/l| passes 1 only below half the rest length.

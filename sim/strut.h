@@ -46,6 +46,6 @@ bool strutBlocks(const Model& model, std::size_t strut, const Vec3* x, const Vec
 void strutVbdTerm(const VbdCall& call, std::size_t strut, int slot, Vec3& f, Sym3& H);
 // Gershgorin rows: k |1 - l0/l| (1 at or above half the rest length) and d, each times
 // 1/m_i + 1/sqrt(m_i m_j), on both ends.
-void strutBoundRows(const Model& model, const Vec3* x, uint32_t body, RowBound* rows);
+void strutBoundRows(const Model& model, const Vec3* x, const double* invMass, uint32_t body, RowBound* rows);
 
 }  // namespace springy

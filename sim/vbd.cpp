@@ -159,7 +159,7 @@ void VbdSolver::startAccelerations(const Vec3* x, const Vec3* v, double t) {
     damped = true;
   }
   if (damped) applyDeformationDamping(m, rigid_.data(), 0, n_, x, v, accel_.data());
-  for (std::size_t i = 0; i < n_; ++i) accel_[i] = m.gravity + accel_[i] * m.invMass[i];
+  for (std::size_t i = 0; i < n_; ++i) accel_[i] = m.gravity + accel_[i] * invMass_[i];
 }
 
 void VbdSolver::blockSystem(uint32_t i, const Vec3* x, double h, Vec3& force, Sym3& hessian, Vec3& gradient) const {
@@ -218,7 +218,7 @@ void VbdSolver::findArrivals(const Vec3* x, double h) {
   const Model& m = *model_;
   for (uint32_t i = 0; i < n_; ++i) {
     arrival_[i] = std::numeric_limits<double>::quiet_NaN();
-    if (!constrained_[i] || m.invMass[i] == 0.0) continue;
+    if (!constrained_[i] || invMass_[i] == 0.0) continue;
     const Vec3& n = contactNormal_[i];
     if (dot(x[i] - contactPoint_[i], n) > 1e-9) continue;  // the springs took it off the surface
     // The force the surface holds it against at the end of the solve (its block's residual:
@@ -238,12 +238,13 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
   Vec3 *x = xs.data(), *v = vs.data();
   ++stats_.steps;
   h_ = dt;
+  invMass_ = forces.inverseMasses();
   startAccelerations(x, v, t);
   std::copy(xs.begin(), xs.end(), x0_.begin());
   ContactHit hit;
   const bool colliders = !m.colliders.empty();
   for (uint32_t i = 0; i < n_; ++i) {
-    if (m.invMass[i] == 0.0) {
+    if (invMass_[i] == 0.0) {
       y_[i] = x[i];
       continue;
     }
@@ -277,7 +278,7 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
         forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
           for (std::size_t k = begin; k < end; ++k) {
             const uint32_t i = list[k];
-            if (m.invMass[i] == 0.0) continue;
+            if (invMass_[i] == 0.0) continue;
             Vec3 f, g, d;
             Sym3 H;
             blockSystem(i, x, dt, f, H, g);
@@ -295,7 +296,7 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
       forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
           const uint32_t i = list[k];
-          if (m.invMass[i] == 0.0) continue;
+          if (invMass_[i] == 0.0) continue;
           Vec3 f;
           blockSystem(i, x, dt, f, hessian_[i], gradient_[i]);
           Ldl3 factor;
@@ -315,7 +316,7 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
       for (std::size_t k = 0; k < count; ++k) {
         const uint32_t i = list[k];
         const int32_t slot = gasSlot_[m.body[i]];
-        if (slot < 0 || m.invMass[i] == 0.0) continue;
+        if (slot < 0 || invMass_[i] == 0.0) continue;
         sumA_[slot] += ga_[i];
         sumB_[slot] += gb_[i];
       }
@@ -325,7 +326,7 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
       forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
           const uint32_t i = list[k];
-          if (m.invMass[i] == 0.0) continue;
+          if (invMass_[i] == 0.0) continue;
           const int32_t slot = gasSlot_[m.body[i]];
           Vec3 d = slot >= 0 ? a_[i] - b_[i] * factor_[slot] : a_[i];
           d = constrain(i, x[i], hessian_[i], d);
@@ -336,7 +337,7 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
       for (std::size_t k = 0; k < count; ++k) {
         const uint32_t i = list[k];
         const int32_t slot = gasSlot_[m.body[i]];
-        if (slot >= 0 && m.invMass[i] != 0.0) volume_[slot] += dVolume_[i];
+        if (slot >= 0 && invMass_[i] != 0.0) volume_[slot] += dVolume_[i];
       }
       for (std::size_t g = 0; g < gasBodies_.size(); ++g) updateGas(g);
     }
@@ -344,7 +345,7 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
   if (colliders) findArrivals(x, dt);
   const double invDt = 1.0 / dt;
   for (uint32_t i = 0; i < n_; ++i) {
-    if (m.invMass[i] == 0.0) continue;
+    if (invMass_[i] == 0.0) continue;
     v[i] = (x[i] - x0_[i]) * invDt;
     if (constrained_[i] && std::fabs(dot(x[i] - contactPoint_[i], contactNormal_[i])) < 1e-12) ++stats_.activeConstraints;
   }

@@ -125,6 +125,7 @@ class VbdSolver {
   std::vector<RigidMotion> rigid_;
   Vec3 air_;
   double h_ = 0.0;  // the step being taken
+  const double* invMass_ = nullptr;  // the World's inverse masses in this step (a released pin moves)
   VbdStats stats_;
 };
 

@@ -38,13 +38,22 @@ void foldLargest(std::atomic<double>& out, double value) {
 
 }  // namespace
 
-World::World(Model model, Integrator integrator, double dt)
-    : model_(std::make_unique<Model>(std::move(model))), integrator_(integrator), dt_(dt) {
-  assert(dt > 0.0);
-  // The model is final once the colliders' trees are built; the force stages read it from here on.
-  for (TriangleCollider& tc : model_->colliders.meshes) {
+namespace {
+
+// The model as a World keeps it, immutable from here on: the colliders' trees built (setup builds
+// them; a model made by hand, as in the tests, gets them here).
+std::unique_ptr<const Model> finished(Model model) {
+  for (TriangleCollider& tc : model.colliders.meshes) {
     if (tc.nodes.empty()) tc.buildBvh();
   }
+  return std::make_unique<const Model>(std::move(model));
+}
+
+}  // namespace
+
+World::World(Model model, Integrator integrator, double dt)
+    : model_(finished(std::move(model))), integrator_(integrator), dt_(dt) {
+  assert(dt > 0.0);
   dampingLayers_ = model_->colliders.dampingLayers();
   movingColliders_ = model_->colliders.moving();
   if (!integratorRefuses(integrator, movingColliders_, false).empty()) {
@@ -85,8 +94,12 @@ World::World(Model model, Integrator integrator, double dt)
   if (BodyContacts::needed(*model_)) contacts_ = std::make_unique<BodyContacts>(*model_);
 
   const std::size_t n = model_->vertexCount();
-  x_ = model_->restPosition;
-  v_ = model_->initialVelocity;
+  state_.x = model_->restPosition;
+  state_.v = model_->initialVelocity;
+  state_.invMass = model_->invMass;
+  state_.released.assign(tracked_.size(), 0);
+  forces_->setInverseMasses(state_.invMass.data());
+  if (contacts_) contacts_->setInverseMasses(state_.invMass.data());
   followPins();
   for (auto* buffer : {&xOld_, &a_}) buffer->assign(n, Vec3{});
   if (!model_->colliders.empty()) sinceContact_.assign(n, 0xFFFF);
@@ -119,7 +132,7 @@ void World::updateStableStep() {
   // that amplify every mode, which these do not.
   constexpr int kFirstIterations = 60, kIterations = 8, kEvaluationsPerIteration = 4;
   const Integrator scheme = integrator_ == Integrator::AdaptiveVerlet ? Integrator::VelocityVerlet : integrator_;
-  const double bound = estimateStability(*model_, x_, scheme, 1.0).dtMax;
+  const double bound = estimateStability(*model_, state_.x, scheme, 1.0, state_.invMass.data()).dtMax;
   sinceStableUpdate_ = 0;
   sinceStableTime_ = 0.0;
   if (!std::isfinite(bound)) {
@@ -130,7 +143,7 @@ void World::updateStableStep() {
   if (first) modes_ = std::make_unique<ModeEstimator>(*forces_);
   if (first || bound < 0.5 * boundAtMode_ || bound > 2.0 * boundAtMode_ || ++sinceMode_ >= 64) {
     const int iterations = first ? kFirstIterations : kIterations;
-    modeStep_ = ModeEstimator::step(scheme, modes_->estimate(x_, iterations), 1.0);
+    modeStep_ = ModeEstimator::step(scheme, modes_->estimate(state_.x, iterations), 1.0);
     evaluations_ += static_cast<uint64_t>(kEvaluationsPerIteration * iterations);
     boundAtMode_ = bound;
     sinceMode_ = 0;
@@ -150,7 +163,7 @@ void World::setTolerance(double tolerance) {
 }
 
 bool World::restingAt(std::size_t i) const {
-  if (adaptive()) return time_ - lastContactTime_[i] <= model_->colliders.restingWindow;
+  if (adaptive()) return state_.time - lastContactTime_[i] <= model_->colliders.restingWindow;
   return sinceContact_[i] <= restingSteps_;
 }
 
@@ -166,9 +179,9 @@ World& World::operator=(World&&) noexcept = default;
 void World::setState(std::vector<Vec3> x, std::vector<Vec3> v, double time) {
   assert(x.size() == model_->vertexCount() && v.size() == model_->vertexCount());
   // Copied into the state's own buffers: their addresses never change (the Python module's views).
-  std::copy(x.begin(), x.end(), x_.begin());
-  std::copy(v.begin(), v.end(), v_.begin());
-  time_ = time;
+  std::copy(x.begin(), x.end(), state_.x.begin());
+  std::copy(v.begin(), v.end(), state_.v.begin());
+  state_.time = time;
   cachedAccelerationValid_ = false;
   staggered_ = false;
   std::fill(sinceContact_.begin(), sinceContact_.end(), 0xFFFF);
@@ -179,11 +192,11 @@ void World::step() {
   // Contacts need the positions at the start of the step (xOld). The integrators that change
   // x only in their last pass save it there (lastPass); the others save it now.
   if (keepsOld() && !savesOldInLastPass()) {
-    Vec3 *x = x_.data(), *xOld = xOld_.data();
+    Vec3 *x = state_.x.data(), *xOld = xOld_.data();
     forVertices([&](std::size_t begin, std::size_t end) { std::copy(x + begin, x + end, xOld + begin); });
   }
   // The moving colliders over the step (the adaptive step sets them for each size it tries).
-  if (movingColliders_ && !adaptive()) model_->colliders.posesOver(time_, time_ + dt_, poses_);
+  if (movingColliders_ && !adaptive()) model_->colliders.posesOver(state_.time, state_.time + dt_, poses_);
   // Integrate; every integrator's last pass over the vertices resolves their contacts too.
   switch (integrator_) {
     case Integrator::ExplicitEuler: stepExplicitEuler(); break;
@@ -199,14 +212,14 @@ void World::step() {
   if (!stepProblem_.empty()) return;  // the adaptive step found no step it could take
   // Contact between and within bodies, over the whole step's paths.
   if (contacts_) {
-    if (adaptive()) std::copy(v_.begin(), v_.end(), vBefore_.begin());
-    if (contacts_->resolve(xOld_, x_, v_, dt_)) {
+    if (adaptive()) std::copy(state_.v.begin(), state_.v.end(), vBefore_.begin());
+    if (contacts_->resolve(xOld_, state_.x, state_.v, dt_)) {
       cachedAccelerationValid_ = false;
       // The adaptive step: a velocity change dv applied at the end of the step instead of at
       // the contact (on average half-way) misplaces the vertex by about |dv| h / 2; the next
       // step is kept short enough for that to stay within the tolerance.
       if (adaptive()) {
-        const Vec3 *v = v_.data(), *vb = vBefore_.data();
+        const Vec3 *v = state_.v.data(), *vb = vBefore_.data();
         const double* inv = invScale_.data();
         const double h = dt_;
         std::atomic<double> worst{0.0};
@@ -219,8 +232,8 @@ void World::step() {
       }
     }
   }
-  time_ = adaptive() && landed_ ? landAt_ : time_ + dt_;
-  ++steps_;
+  state_.time = adaptive() && landed_ ? landAt_ : state_.time + dt_;
+  ++state_.steps;
   if (!tracked_.empty()) followPins();
 }
 
@@ -247,36 +260,37 @@ void World::addAttachments(const Vec3* x, const Vec3* v, double t, Vec3* a) cons
     } else {
       f = d * s.k + u * s.d;
     }
-    a[s.vertex] += f * m.invMass[s.vertex];
-    if (s.other != Model::Attachment::kNone) a[s.other] -= f * m.invMass[s.other];
+    a[s.vertex] += f * state_.invMass[s.vertex];
+    if (s.other != Model::Attachment::kNone) a[s.other] -= f * state_.invMass[s.other];
   }
 }
 
 void World::followPins() {
-  for (TrackedPins& t : tracked_) {
-    if (t.released) continue;
+  for (std::size_t p = 0; p < tracked_.size(); ++p) {
+    const TrackedPins& t = tracked_[p];
+    if (state_.released[p]) continue;
     const Model::PinTrack& track = *t.track;
-    if (time_ >= track.release) {
+    if (state_.time >= track.release) {
       // Free from now on, at the velocity the motion gave them.
-      for (uint32_t i : t.vertices) model_->invMass[i] = 1.0 / model_->mass[i];
-      t.released = true;
+      for (uint32_t i : t.vertices) state_.invMass[i] = 1.0 / model_->mass[i];
+      state_.released[p] = 1;
       cachedAccelerationValid_ = false;
       continue;
     }
     if (!track.motion.moves()) continue;
-    const Pose pose = track.motion.pose(time_);
+    const Pose pose = track.motion.pose(state_.time);
     for (std::size_t k = 0; k < t.vertices.size(); ++k) {
       const uint32_t i = t.vertices[k];
-      x_[i] = pose.apply(t.rest[k]);
-      v_[i] = track.motion.velocityAt(x_[i], time_);
+      state_.x[i] = pose.apply(t.rest[k]);
+      state_.v[i] = track.motion.velocityAt(state_.x[i], state_.time);
     }
     cachedAccelerationValid_ = false;
   }
 }
 
 void World::stepExplicitEuler() {
-  const double dt = dt_, t = time_;
-  Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data();
+  const double dt = dt_, t = state_.time;
+  Vec3 *x = state_.x.data(), *v = state_.v.data(), *a = a_.data();
   accelerations(x, v, t, a);
   lastPass([&](std::size_t i) {
     x[i] += v[i] * dt;
@@ -285,8 +299,8 @@ void World::stepExplicitEuler() {
 }
 
 void World::stepSymplecticEuler() {
-  const double dt = dt_, t = time_;
-  Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data();
+  const double dt = dt_, t = state_.time;
+  Vec3 *x = state_.x.data(), *v = state_.v.data(), *a = a_.data();
   accelerations(x, v, t, a);
   lastPass([&](std::size_t i) {
     v[i] += a[i] * dt;
@@ -297,14 +311,14 @@ void World::stepSymplecticEuler() {
 
 bool World::synchronizedState(std::vector<Vec3>& x, std::vector<Vec3>& v) const {
   if (!staggered_ || integrator_ != Integrator::SymplecticEuler) return false;
-  const std::size_t n = x_.size();
+  const std::size_t n = state_.x.size();
   x.resize(n);
   v.resize(n);
   const bool old = keepsOld();  // xOld is x(n) exactly, also where a contact moved a vertex
   forVertices([&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
-      x[i] = old ? xOld_[i] : x_[i] - v_[i] * dt_;
-      v[i] = v_[i] - a_[i] * (0.5 * dt_);
+      x[i] = old ? xOld_[i] : state_.x[i] - state_.v[i] * dt_;
+      v[i] = state_.v[i] - a_[i] * (0.5 * dt_);
     }
   });
   return true;
@@ -318,8 +332,8 @@ void World::stepVelocityVerlet() {
   // vertex that hit the ground pulled its neighbours down for half a step), and a(t + dt) stays
   // valid for the next step, which no longer evaluates again after a contact. The errors through
   // contact, mostly smaller and on some scenes larger: docs/model.md §14, docs/accuracy-contact.md.
-  const double dt = dt_, t = time_;
-  Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data(), *vs = vs_.data(), *aNext = aNext_.data();
+  const double dt = dt_, t = state_.time;
+  Vec3 *x = state_.x.data(), *v = state_.v.data(), *a = a_.data(), *vs = vs_.data(), *aNext = aNext_.data();
   if (!cachedAccelerationValid_) accelerations(x, v, t, a);
   const bool contacts = !model_->colliders.empty();
   forVertices([&](std::size_t begin, std::size_t end) {
@@ -345,8 +359,8 @@ void World::stepLeapfrog() {
   // v(t + dt), which it is about to compute; the half-step velocity plus the first half
   // kick once more predicts it to O(dt^2), which keeps the scheme second order when the
   // forces depend on velocity (dampers, drag). With position-only forces it is exact KDK.
-  const double dt = dt_, t = time_;
-  Vec3 *x = x_.data(), *v = v_.data(), *a = a_.data(), *vs = vs_.data();
+  const double dt = dt_, t = state_.time;
+  Vec3 *x = state_.x.data(), *v = state_.v.data(), *a = a_.data(), *vs = vs_.data();
   accelerations(x, v, t, a);
   forVertices([&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
@@ -360,8 +374,8 @@ void World::stepLeapfrog() {
 }
 
 void World::stepRK4() {
-  const double dt = dt_, t = time_;
-  Vec3 *x = x_.data(), *v = v_.data();
+  const double dt = dt_, t = state_.time;
+  Vec3 *x = state_.x.data(), *v = state_.v.data();
   // k1 = f(y), k2 = f(y + dt/2 k1), k3 = f(y + dt/2 k2), k4 = f(y + dt k3); the position
   // slopes are the stage velocities, the velocity slopes the stage accelerations.
   // k1x is the velocity itself (read, not copied: v changes only in the final update, after
@@ -396,14 +410,14 @@ void World::stepRK4() {
 }
 
 void World::stepBackwardEuler() {
-  implicit_->step(*forces_, x_, v_, time_, dt_);
+  implicit_->step(*forces_, state_.x, state_.v, state_.time, dt_);
   if (!model_->colliders.empty()) lastPass([](std::size_t) {});  // the static colliders' pass
 }
 
 void World::stepVbd() {
-  vbd_->step(*forces_, x_, v_, time_, dt_);
+  vbd_->step(*forces_, state_.x, state_.v, state_.time, dt_);
   // Restitution and friction, on the velocities the held vertices arrived with (VbdSolver::arrive).
-  if (!model_->colliders.empty()) lastPass([&](std::size_t i) { vbd_->arrive(static_cast<uint32_t>(i), x_[i], v_[i]); });
+  if (!model_->colliders.empty()) lastPass([&](std::size_t i) { vbd_->arrive(static_cast<uint32_t>(i), state_.x[i], state_.v[i]); });
 }
 
 void World::setIterations(int iterations) {
@@ -413,7 +427,7 @@ void World::setIterations(int iterations) {
 bool World::chooseStep(double& h, double& wanted) {
   // The controller's step under the stability bound, shortened to land on the stop (or to halve
   // what is left, so that no sliver of a step remains before it).
-  const double t = time_;
+  const double t = state_.time;
   wanted = std::min(hNext_, stableStep_);
   h = wanted;
   landed_ = false;
@@ -482,8 +496,8 @@ void World::stepBogackiShampine() {
   // The estimate is taken in positions, whose slope is the velocity: k4's position part is the
   // candidate's own velocity, so the estimate needs no fourth evaluation; three per step (k1
   // once per step however often it is taken again), two per rejected try.
-  const double t = time_;
-  const Vec3 *x = x_.data(), *v = v_.data();
+  const double t = state_.time;
+  const Vec3 *x = state_.x.data(), *v = state_.v.data();
   Vec3 *k1v = k1v_.data(), *k2x = k2x_.data(), *k2v = k2v_.data(), *k3x = k3x_.data(), *k3v = k3v_.data();
   Vec3 *xs = xs_.data(), *vs = vs_.data(), *xn = xn_.data(), *vn = vn_.data();
   const double* inv = invScale_.data();
@@ -491,7 +505,7 @@ void World::stepBogackiShampine() {
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
     if (!chooseStep(h, wanted)) return;
-    if (movingColliders_) model_->colliders.posesOver(time_, time_ + h, poses_);
+    if (movingColliders_) model_->colliders.posesOver(state_.time, state_.time + h, poses_);
     const auto stage = [&](double c, const Vec3* kx, const Vec3* kv, Vec3* nextKx) {
       forVertices([&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
@@ -528,8 +542,8 @@ void World::stepAdaptiveVerlet() {
   // Bogacki-Shampine's 1.73/omega for three evaluations, which makes it the cheaper of the two
   // where stability, not accuracy, bounds the step. The static colliders act on the candidate
   // before a1 is evaluated, as in fixed-step Verlet (stepVelocityVerlet).
-  const double t = time_;
-  const Vec3 *x = x_.data(), *v = v_.data();
+  const double t = state_.time;
+  const Vec3 *x = state_.x.data(), *v = state_.v.data();
   if (!cachedAccelerationValid_) accelerations(x, v, t, k1v_.data());
   const Vec3* a0 = k1v_.data();
   Vec3 *a1 = k2v_.data(), *vs = vs_.data(), *xn = xn_.data(), *vn = vn_.data();
@@ -538,7 +552,7 @@ void World::stepAdaptiveVerlet() {
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
     if (!chooseStep(h, wanted)) return;
-    if (movingColliders_) model_->colliders.posesOver(time_, time_ + h, poses_);
+    if (movingColliders_) model_->colliders.posesOver(state_.time, state_.time + h, poses_);
     std::atomic<double> impactWorst{0.0};
     forVertices([&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
@@ -578,14 +592,14 @@ double World::collideCandidate(std::size_t begin, std::size_t end, double h) {
   // nothing outside the candidate changes (the step may be taken again). Returns the largest
   // impact error (impactMisplacement, as a fraction of the tolerance).
   const Colliders& colliders = model_->colliders;
-  const Vec3* x = x_.data();
+  const Vec3* x = state_.x.data();
   Vec3 *xn = xn_.data(), *vs = vs_.data();
   const double* inv = invScale_.data();
   const ColliderPoses* moving = poses();
   double worst = 0.0;
   for (std::size_t i = begin; i < end; ++i) {
     candidateHit_[i] = 0;
-    if (model_->invMass[i] == 0.0) continue;  // pinned
+    if (state_.invMass[i] == 0.0) continue;  // pinned
     if (!colliders.clearAt(xn[i], moving)) {
       const Vec3 before = vs[i];
       const bool resting = restingAt(i);
@@ -614,7 +628,7 @@ void World::accept(double h, double wanted, double factor, double error, bool af
     ++stats_.landed;
   }
   ++stats_.accepted;
-  Vec3 *x = x_.data(), *v = v_.data();
+  Vec3 *x = state_.x.data(), *v = state_.v.data();
   const Vec3 *xn = xn_.data(), *vn = vn_.data();
   lastPass([&](std::size_t i) {
     x[i] = xn[i];
@@ -643,12 +657,12 @@ double World::impactError(double h) const {
   // is accepted). Sustained contact counts too: a body pressing into the ground as it lands
   // stops its lowest vertices at every step, which is where most of a landing's error is made.
   const Colliders& colliders = model_->colliders;
-  const Vec3 *x = x_.data(), *xn = xn_.data(), *vn = vn_.data();
+  const Vec3 *x = state_.x.data(), *xn = xn_.data(), *vn = vn_.data();
   const double* inv = invScale_.data();
   std::atomic<double> worst{0.0};
   forVertices([&](std::size_t begin, std::size_t end) {
     foldLargest(worst, largestOver(begin, end, [&](std::size_t i) {
-                  if (model_->invMass[i] == 0.0 || colliders.clearAt(xn[i], poses())) return 0.0;
+                  if (state_.invMass[i] == 0.0 || colliders.clearAt(xn[i], poses())) return 0.0;
                   ContactHit hit;
                   if (!colliders.firstHit(x[i], xn[i], hit, poses())) return 0.0;
                   return impactMisplacement(vn[i], hit, restingAt(i), h) * inv[i];
@@ -668,13 +682,13 @@ void World::lastPass(Update&& update) {
   // (a vertex's contact reads only its own old and new state).
   const bool contacts = !model_->colliders.empty(), saveOld = keepsOld() && savesOldInLastPass();
   std::atomic<bool> touched{false};
-  Vec3 *x = x_.data(), *xOld = xOld_.data();
+  Vec3 *x = state_.x.data(), *xOld = xOld_.data();
   forVertices([&](std::size_t begin, std::size_t end) {
     if (saveOld) std::copy(x + begin, x + end, xOld + begin);
     for (std::size_t i = begin; i < end; ++i) update(i);
     if (contacts && integrator_ == Integrator::AdaptiveVerlet) {
       recordCandidateContacts(begin, end);  // resolved on the candidate (collideCandidate)
-    } else if (contacts && collide(begin, end, v_.data())) {
+    } else if (contacts && collide(begin, end, state_.v.data())) {
       touched.store(true, std::memory_order_relaxed);
     }
   });
@@ -689,7 +703,7 @@ void World::recordCandidateContacts(std::size_t begin, std::size_t end) {
 
 void World::bookContact(std::size_t i, bool hit) {
   sinceContact_[i] = hit ? 0 : static_cast<uint16_t>(std::min<int>(sinceContact_[i] + 1, 0xFFFF));
-  if (hit && adaptive()) lastContactTime_[i] = time_;
+  if (hit && adaptive()) lastContactTime_[i] = state_.time;
 }
 
 bool World::collide(std::size_t begin, std::size_t end, Vec3* velocity) {
@@ -697,11 +711,11 @@ bool World::collide(std::size_t begin, std::size_t end, Vec3* velocity) {
   const bool layers = dampingLayers_;
   bool hitAny = false;
   for (std::size_t i = begin; i < end; ++i) {
-    if (model_->invMass[i] == 0.0) continue;  // pinned
-    const bool hit = !colliders.clearAt(x_[i], poses()) &&
-                     colliders.resolve(xOld_[i], x_[i], velocity[i], restingAt(i), nullptr, poses());
+    if (state_.invMass[i] == 0.0) continue;  // pinned
+    const bool hit = !colliders.clearAt(state_.x[i], poses()) &&
+                     colliders.resolve(xOld_[i], state_.x[i], velocity[i], restingAt(i), nullptr, poses());
     bookContact(i, hit);
-    const bool damped = layers && colliders.dampInLayers(x_[i], velocity[i], dt_);
+    const bool damped = layers && colliders.dampInLayers(state_.x[i], velocity[i], dt_);
     hitAny = hitAny || hit || damped;
   }
   return hitAny;

@@ -32,6 +32,7 @@
 #include "sim/force_stages.h"
 #include "sim/integrators.h"
 #include "sim/model.h"
+#include "sim/state.h"
 
 namespace springy {
 
@@ -64,7 +65,7 @@ class World {
   }
   // Whether the state has reached `time`: exactly for the adaptive step, within half a step for
   // a fixed one.
-  bool reached(double time) const { return adaptive() ? time_ >= time : time_ >= time - 0.5 * dt_; }
+  bool reached(double time) const { return adaptive() ? state_.time >= time : state_.time >= time - 0.5 * dt_; }
 
   // The adaptive integrator (Bogacki-Shampine 3(2), Integrator::BogackiShampine). Each step's
   // local error is estimated twice: by the embedded second-order solution (the difference of
@@ -118,8 +119,8 @@ class World {
   const Model& model() const { return *model_; }
   Integrator integrator() const { return integrator_; }
   double dt() const { return dt_; }  // the step (the adaptive integrator's: the last one taken)
-  double time() const { return time_; }
-  uint64_t stepCount() const { return steps_; }
+  double time() const { return state_.time; }
+  uint64_t stepCount() const { return state_.steps; }
   // Force evaluations so far by the explicit integrators (the work a step costs; backward
   // Euler's solver evaluates through its own path and is not counted).
   uint64_t forceEvaluations() const { return evaluations_; }
@@ -129,8 +130,11 @@ class World {
   // Whether vertex i touches something: it rests on a static collider, or had a contact with a
   // body (another, or its own) in the last step. For exports.
   bool touching(std::size_t i) const { return restsOnCollider(i) || (contacts_ && contacts_->touching(i)); }
-  const std::vector<Vec3>& positions() const { return x_; }
-  const std::vector<Vec3>& velocities() const { return v_; }
+  const std::vector<Vec3>& positions() const { return state_.x; }
+  const std::vector<Vec3>& velocities() const { return state_.v; }
+  // Per vertex, 1 / m or 0 while held: the model's, as the run releases its pins (State::invMass).
+  const std::vector<double>& inverseMasses() const { return state_.invMass; }
+  const State& state() const { return state_; }
   const std::vector<ForceStage>& forceStages() const { return forces_->stages(); }
   bool collides() const { return !model_->colliders.empty(); }
   // The backward Euler solver (its statistics), or null for the explicit integrators.
@@ -189,7 +193,7 @@ class World {
   // How far a vertex with `velocity` that hits at `hit` is misplaced by getting its contact
   // velocity at the end of a step h instead of at the hit: |dv| (1 - s) h [m].
   double impactMisplacement(const Vec3& velocity, const ContactHit& hit, bool resting, double h) const;
-  // One function per integrator: advances x_ and v_ by dt_ from time_, contacts included.
+  // One function per integrator: advances the state by dt_ from its time, contacts included.
   void stepExplicitEuler();
   void stepSymplecticEuler();
   void stepVelocityVerlet();
@@ -218,14 +222,14 @@ class World {
   // and the mode is found again when that bound has moved by a factor 2 (or every 64 updates);
   // in between, the mode's step is scaled by the bound's change. Never below Gershgorin's own step.
   void updateStableStep();
-  std::unique_ptr<Model> model_;  // on the heap: Forces keeps its address across moves of the World
+  // Immutable once made (the colliders' trees built): on the heap, as Forces keeps its address
+  // across moves of the World.
+  std::unique_ptr<const Model> model_;
   Integrator integrator_;
   double dt_;
-  double time_ = 0.0;
-  uint64_t steps_ = 0;
+  State state_;
   bool staggered_ = false;  // the last step was symplectic Euler's (synchronizedState)
   mutable uint64_t evaluations_ = 0;
-  std::vector<Vec3> x_, v_;
   // Scratch, sized once.
   std::vector<Vec3> xOld_, a_, k1v_, k2x_, k2v_, k3x_, k3v_, k4v_, xs_, vs_, aNext_;
   std::vector<uint16_t> sinceContact_;  // steps since each vertex last touched a collider
@@ -252,15 +256,15 @@ class World {
   ColliderPoses poses_;
   std::vector<double> kinks_;
   const ColliderPoses* poses() const { return movingColliders_ ? &poses_ : nullptr; }
-  // Pins that move or are released (Model::pinTracks): their vertices and rest positions.
+  // Pins that move or are released (Model::pinTracks): their vertices and rest positions
+  // (released: State::released).
   struct TrackedPins {
     const Model::PinTrack* track = nullptr;
     std::vector<uint32_t> vertices;
     std::vector<Vec3> rest;
-    bool released = false;
   };
   std::vector<TrackedPins> tracked_;
-  // Puts the tracked pins where their motion has them at time_ (and frees those due).
+  // Puts the tracked pins where their motion has them at the state's time (and frees those due).
   void followPins();
   std::vector<double> invScale_;         // per vertex: 1 / (tolerance x its body's rest size)
   std::vector<double> lastContactTime_;  // per vertex: when it last touched a static collider

@@ -135,6 +135,7 @@ Model buildModel(const SimulationDesc& scene) {
   }
   model.colliders.planes = scene.planes;
   model.colliders.meshes = scene.triangleColliders;
+  for (TriangleCollider& tc : model.colliders.meshes) tc.buildBvh();  // the model is complete: its trees built
   for (const AttachDesc& a : scene.attachments) addAttachment(model, a, scene);
   // Impacts slower than a few steps' worth of gravity are resting contact, not bounces: a
   // vertex on the ground gains |g| dt of speed per step and must not be launched back up.

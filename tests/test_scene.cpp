@@ -481,7 +481,7 @@ friction = 0.5
   EXPECT_NEAR(model.colliders.restingSpeed, 4 * 9.81 * 0.002, 1e-15);
   const World world(model, scene.integrator, stepSize(scene));
   EXPECT_TRUE(world.collides());
-  EXPECT_FALSE(world.model().colliders.meshes[0].nodes.empty());  // the World built the BVH
+  EXPECT_FALSE(model.colliders.meshes[0].nodes.empty());  // setup built the BVH
 
   // The ramp is a collider: a path down through its top quad stops on it (y = 6), above the
   // plane (y = -1).

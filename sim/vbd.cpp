@@ -49,39 +49,7 @@ bool solveSym3(const Sym3& h, const Vec3& b, Vec3& x) {
 
 }  // namespace
 
-VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), iterations_(iterations) {
-  n_ = model.vertexCount();
-  // Each kind's elements around each vertex, in element order.
-  uint32_t corners[4];
-  for (ForceStage stage : stagesOf(model)) {
-    const ForceKind& kind = forceKind(stage);
-    if (!kind.vbdElement && !kind.vbdVertex) continue;
-    KindTerms& terms = kinds_.emplace_back(KindTerms{&kind, {}, {}});
-    if (!kind.vbdElement) continue;
-    const std::size_t count = kind.elementCount(model);
-    const auto size = static_cast<uint32_t>(kind.elementSize);
-    terms.start.assign(n_ + 1, 0);
-    for (std::size_t e = 0; e < count; ++e) {
-      kind.elementVertices(model, e, corners);
-      for (uint32_t s = 0; s < size; ++s) ++terms.start[corners[s] + 1];
-    }
-    for (std::size_t i = 0; i < n_; ++i) terms.start[i + 1] += terms.start[i];
-    terms.list.resize(terms.start[n_]);
-    std::vector<uint32_t> fill(terms.start.begin(), terms.start.end() - 1);
-    for (std::size_t e = 0; e < count; ++e) {
-      kind.elementVertices(model, e, corners);
-      for (uint32_t s = 0; s < size; ++s) terms.list[fill[corners[s]]++] = static_cast<uint32_t>(e) * size + s;
-    }
-  }
-  gasSlot_.assign(model.bodies.size(), -1);
-  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
-    if (model.bodies[b].gasPressure > 0.0) {
-      gasSlot_[b] = static_cast<int32_t>(gasBodies_.size());
-      gasBodies_.push_back(b);
-    }
-  }
-  if (!gasBodies_.empty()) faces_ = vertexFaces(model);
-
+void VbdSolver::colourVertices(const Model& model) {
   // Colours: greedy in index order over "shares a strut, a hinge or a face", so that a colour's
   // vertices read none of each other's positions (and, for the gas, share no face).
   std::vector<std::vector<uint32_t>> neighbours(n_);
@@ -90,6 +58,7 @@ VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), itera
     neighbours[a].push_back(b);
     neighbours[b].push_back(a);
   };
+  uint32_t corners[4];
   for (const KindTerms& terms : kinds_) {
     const ForceKind& kind = *terms.kind;
     if (!kind.vbdElement) continue;
@@ -127,6 +96,43 @@ VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), itera
   colourVertices_.resize(n_);
   std::vector<uint32_t> fill(colourStart_.begin(), colourStart_.end() - 1);
   for (uint32_t i = 0; i < n_; ++i) colourVertices_[fill[colourOf[i]]++] = i;
+
+}
+
+VbdSolver::VbdSolver(const Model& model, int iterations) : model_(&model), iterations_(iterations) {
+  n_ = model.vertexCount();
+  // Each kind's elements around each vertex, in element order.
+  uint32_t corners[4];
+  for (ForceStage stage : stagesOf(model)) {
+    const ForceKind& kind = forceKind(stage);
+    if (!kind.vbdElement && !kind.vbdVertex) continue;
+    KindTerms& terms = kinds_.emplace_back(KindTerms{&kind, {}, {}});
+    if (!kind.vbdElement) continue;
+    const std::size_t count = kind.elementCount(model);
+    const auto size = static_cast<uint32_t>(kind.elementSize);
+    terms.start.assign(n_ + 1, 0);
+    for (std::size_t e = 0; e < count; ++e) {
+      kind.elementVertices(model, e, corners);
+      for (uint32_t s = 0; s < size; ++s) ++terms.start[corners[s] + 1];
+    }
+    for (std::size_t i = 0; i < n_; ++i) terms.start[i + 1] += terms.start[i];
+    terms.list.resize(terms.start[n_]);
+    std::vector<uint32_t> fill(terms.start.begin(), terms.start.end() - 1);
+    for (std::size_t e = 0; e < count; ++e) {
+      kind.elementVertices(model, e, corners);
+      for (uint32_t s = 0; s < size; ++s) terms.list[fill[corners[s]]++] = static_cast<uint32_t>(e) * size + s;
+    }
+  }
+  gasSlot_.assign(model.bodies.size(), -1);
+  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+    if (model.bodies[b].gasPressure > 0.0) {
+      gasSlot_[b] = static_cast<int32_t>(gasBodies_.size());
+      gasBodies_.push_back(b);
+    }
+  }
+  if (!gasBodies_.empty()) faces_ = vertexFaces(model);
+
+  colourVertices(model);
 
   for (auto* buffer : {&x0_, &y_, &accel_, &contactPoint_, &contactNormal_}) buffer->assign(n_, Vec3{});
   dVolume_.assign(n_, 0.0);
@@ -233,14 +239,8 @@ void VbdSolver::findArrivals(const Vec3* x, double h) {
   }
 }
 
-void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Vec3>& vs, double t, double dt) {
+void VbdSolver::predict(Vec3* x, const Vec3* v, double dt) {
   const Model& m = *model_;
-  Vec3 *x = xs.data(), *v = vs.data();
-  ++stats_.steps;
-  h_ = dt;
-  invMass_ = forces.inverseMasses();
-  startAccelerations(x, v, t);
-  std::copy(xs.begin(), xs.end(), x0_.begin());
   ContactHit hit;
   const bool colliders = !m.colliders.empty();
   for (uint32_t i = 0; i < n_; ++i) {
@@ -260,11 +260,88 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
       if (s < 0.0) x[i] -= hit.normal * s;  // the guess starts on the surface
     }
   }
-  const auto updateGas = [&](std::size_t k) {
-    const BodyInfo& info = m.bodies[gasBodies_[k]];
-    stiffness_[k] = volume_[k] > 0.0 ? info.gasPressure * info.restVolume / (volume_[k] * volume_[k]) : 0.0;
-    overpressure_[k] = gasOverpressure(info, volume_[k]);
-  };
+}
+
+void VbdSolver::updateGas(std::size_t k) {
+  const BodyInfo& info = model_->bodies[gasBodies_[k]];
+  stiffness_[k] = volume_[k] > 0.0 ? info.gasPressure * info.restVolume / (volume_[k] * volume_[k]) : 0.0;
+  overpressure_[k] = gasOverpressure(info, volume_[k]);
+}
+
+void VbdSolver::sweepColour(const Forces& forces, const uint32_t* list, std::size_t count, Vec3* x, double dt) {
+  forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const uint32_t i = list[k];
+      if (invMass_[i] == 0.0) continue;
+      Vec3 f, g, d;
+      Sym3 H;
+      blockSystem(i, x, dt, f, H, g);
+      if (!solveSym3(H, f, d)) continue;  // cannot happen: H >= m / h^2 I
+      x[i] += constrain(i, x[i], H, d);
+    }
+  });
+}
+
+void VbdSolver::sweepColourWithGas(const Forces& forces, const uint32_t* list, std::size_t count, Vec3* x, double dt) {
+  const Model& m = *model_;
+  forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const uint32_t i = list[k];
+      if (invMass_[i] == 0.0) continue;
+      Vec3 f;
+      blockSystem(i, x, dt, f, hessian_[i], gradient_[i]);
+      Ldl3 factor;
+      if (factor.factor(hessian_[i])) {
+        a_[i] = factor.solve(f);
+        b_[i] = factor.solve(gradient_[i]);
+      } else {  // cannot happen: H >= m / h^2 I
+        a_[i] = b_[i] = Vec3{};
+      }
+      ga_[i] = dot(gradient_[i], a_[i]);
+      gb_[i] = dot(gradient_[i], b_[i]);
+    }
+  });
+  // In colour order, on one thread: the same sums on any thread count.
+  std::fill(sumA_.begin(), sumA_.end(), 0.0);
+  std::fill(sumB_.begin(), sumB_.end(), 0.0);
+  for (std::size_t k = 0; k < count; ++k) {
+    const uint32_t i = list[k];
+    const int32_t slot = gasSlot_[m.body[i]];
+    if (slot < 0 || invMass_[i] == 0.0) continue;
+    sumA_[slot] += ga_[i];
+    sumB_[slot] += gb_[i];
+  }
+  for (std::size_t g = 0; g < gasBodies_.size(); ++g) {
+    factor_[g] = stiffness_[g] * sumA_[g] / (1.0 + stiffness_[g] * sumB_[g]);
+  }
+  forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const uint32_t i = list[k];
+      if (invMass_[i] == 0.0) continue;
+      const int32_t slot = gasSlot_[m.body[i]];
+      Vec3 d = slot >= 0 ? a_[i] - b_[i] * factor_[slot] : a_[i];
+      d = constrain(i, x[i], hessian_[i], d);
+      x[i] += d;
+      dVolume_[i] = dot(gradient_[i], d);
+    }
+  });
+  for (std::size_t k = 0; k < count; ++k) {
+    const uint32_t i = list[k];
+    const int32_t slot = gasSlot_[m.body[i]];
+    if (slot >= 0 && invMass_[i] != 0.0) volume_[slot] += dVolume_[i];
+  }
+  for (std::size_t g = 0; g < gasBodies_.size(); ++g) updateGas(g);
+}
+
+void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Vec3>& vs, double t, double dt) {
+  const Model& m = *model_;
+  Vec3 *x = xs.data(), *v = vs.data();
+  ++stats_.steps;
+  h_ = dt;
+  invMass_ = forces.inverseMasses();
+  startAccelerations(x, v, t);
+  std::copy(xs.begin(), xs.end(), x0_.begin());
+  predict(x, v, dt);
   for (std::size_t k = 0; k < gasBodies_.size(); ++k) {
     volume_[k] = enclosedVolume(m, gasBodies_[k], x);
     updateGas(k);
@@ -274,75 +351,19 @@ void VbdSolver::step(const Forces& forces, std::vector<Vec3>& xs, std::vector<Ve
     for (std::size_t c = 0; c + 1 < colourStart_.size(); ++c) {
       std::size_t count;
       const uint32_t* list = colour(c, count);
-      if (gasBodies_.empty()) {
-        forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
-          for (std::size_t k = begin; k < end; ++k) {
-            const uint32_t i = list[k];
-            if (invMass_[i] == 0.0) continue;
-            Vec3 f, g, d;
-            Sym3 H;
-            blockSystem(i, x, dt, f, H, g);
-            if (!solveSym3(H, f, d)) continue;  // cannot happen: H >= m / h^2 I
-            x[i] += constrain(i, x[i], H, d);
-          }
-        });
-        continue;
-      }
       // With a gas the colour's vertices are coupled through the volume they share: the block
       // system is D + c G G^T (D the colour's 3x3 blocks, G its volume gradients, c = p0 V0 / V^2),
       // solved exactly by Sherman-Morrison: dx_i = a_i - b_i c (G . a) / (1 + c G . b), with
       // a_i = D_i^-1 f_i and b_i = D_i^-1 g_i (solving each vertex alone overshoots the volume
       // by about the colour's size times and diverges).
-      forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k) {
-          const uint32_t i = list[k];
-          if (invMass_[i] == 0.0) continue;
-          Vec3 f;
-          blockSystem(i, x, dt, f, hessian_[i], gradient_[i]);
-          Ldl3 factor;
-          if (factor.factor(hessian_[i])) {
-            a_[i] = factor.solve(f);
-            b_[i] = factor.solve(gradient_[i]);
-          } else {  // cannot happen: H >= m / h^2 I
-            a_[i] = b_[i] = Vec3{};
-          }
-          ga_[i] = dot(gradient_[i], a_[i]);
-          gb_[i] = dot(gradient_[i], b_[i]);
-        }
-      });
-      // In colour order, on one thread: the same sums on any thread count.
-      std::fill(sumA_.begin(), sumA_.end(), 0.0);
-      std::fill(sumB_.begin(), sumB_.end(), 0.0);
-      for (std::size_t k = 0; k < count; ++k) {
-        const uint32_t i = list[k];
-        const int32_t slot = gasSlot_[m.body[i]];
-        if (slot < 0 || invMass_[i] == 0.0) continue;
-        sumA_[slot] += ga_[i];
-        sumB_[slot] += gb_[i];
+      if (gasBodies_.empty()) {
+        sweepColour(forces, list, count, x, dt);
+      } else {
+        sweepColourWithGas(forces, list, count, x, dt);
       }
-      for (std::size_t g = 0; g < gasBodies_.size(); ++g) {
-        factor_[g] = stiffness_[g] * sumA_[g] / (1.0 + stiffness_[g] * sumB_[g]);
-      }
-      forces.parallelFor(count, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k) {
-          const uint32_t i = list[k];
-          if (invMass_[i] == 0.0) continue;
-          const int32_t slot = gasSlot_[m.body[i]];
-          Vec3 d = slot >= 0 ? a_[i] - b_[i] * factor_[slot] : a_[i];
-          d = constrain(i, x[i], hessian_[i], d);
-          x[i] += d;
-          dVolume_[i] = dot(gradient_[i], d);
-        }
-      });
-      for (std::size_t k = 0; k < count; ++k) {
-        const uint32_t i = list[k];
-        const int32_t slot = gasSlot_[m.body[i]];
-        if (slot >= 0 && invMass_[i] != 0.0) volume_[slot] += dVolume_[i];
-      }
-      for (std::size_t g = 0; g < gasBodies_.size(); ++g) updateGas(g);
     }
   }
-  if (colliders) findArrivals(x, dt);
+  if (!m.colliders.empty()) findArrivals(x, dt);
   const double invDt = 1.0 / dt;
   for (uint32_t i = 0; i < n_; ++i) {
     if (invMass_[i] == 0.0) continue;

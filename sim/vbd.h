@@ -95,6 +95,16 @@ class VbdSolver {
   Vec3 constrain(uint32_t i, const Vec3& xi, const Sym3& hessian, Vec3 dx) const;
   // The forces taken at the step's start (gravity, wind, deformation damping) into accel_.
   void startAccelerations(const Vec3* x, const Vec3* v, double t);
+  // Colours: greedy in index order over "shares an element or a face" (colourStart_, colourVertices_).
+  void colourVertices(const Model& model);
+  // The inertial prediction y = x0 + h (v0 + h a) as the first guess, each vertex whose path
+  // there hits a collider held on its surface.
+  void predict(Vec3* x, const Vec3* v, double dt);
+  // Gas body k's stiffness p0 V0 / V^2 and overpressure at its current volume.
+  void updateGas(std::size_t k);
+  // One colour's block solves: each vertex alone, or with a gas the colour's system at once.
+  void sweepColour(const Forces& forces, const uint32_t* list, std::size_t count, Vec3* x, double dt);
+  void sweepColourWithGas(const Forces& forces, const uint32_t* list, std::size_t count, Vec3* x, double dt);
 
   const Model* model_;
   int iterations_;

@@ -121,46 +121,15 @@ World::World(Model model, Integrator integrator, double dt)
       lastContactTime_.assign(n, -std::numeric_limits<double>::infinity());
       candidateHit_.assign(n, 0);
     }
-    hNext_ = dt_;
-    setTolerance(tolerance_);
+    adaptive_.setFirstStep(dt_);
+    setTolerance(adaptive_.tolerance());
     updateStableStep();
   }
 }
 
-void World::updateStableStep() {
-  // At the current shape: a compressed body is stiffer. The horizon only matters for methods
-  // that amplify every mode, which these do not.
-  constexpr int kFirstIterations = 60, kIterations = 8, kEvaluationsPerIteration = 4;
-  const Integrator scheme = integrator_ == Integrator::AdaptiveVerlet ? Integrator::VelocityVerlet : integrator_;
-  const double bound = estimateStability(*model_, state_.x, scheme, 1.0, state_.invMass.data()).dtMax;
-  sinceStableUpdate_ = 0;
-  sinceStableTime_ = 0.0;
-  if (!std::isfinite(bound)) {
-    stableStep_ = std::numeric_limits<double>::infinity();
-    return;
-  }
-  const bool first = !modes_;
-  if (first) modes_ = std::make_unique<ModeEstimator>(*forces_);
-  if (first || bound < 0.5 * boundAtMode_ || bound > 2.0 * boundAtMode_ || ++sinceMode_ >= 64) {
-    const int iterations = first ? kFirstIterations : kIterations;
-    modeStep_ = ModeEstimator::step(scheme, modes_->estimate(state_.x, iterations), 1.0);
-    evaluations_ += static_cast<uint64_t>(kEvaluationsPerIteration * iterations);
-    boundAtMode_ = bound;
-    sinceMode_ = 0;
-  }
-  const double limit = std::max(bound, modeStep_ * (bound / boundAtMode_));
-  stableStep_ = std::isfinite(limit) ? kStableFraction * limit : std::numeric_limits<double>::infinity();
-}
 
-void World::setTolerance(double tolerance) {
-  assert(tolerance > 0.0);
-  tolerance_ = tolerance;
-  invScale_.assign(model_->vertexCount(), 0.0);
-  for (const BodyInfo& b : model_->bodies) {
-    const double scale = 1.0 / (tolerance * std::max(b.restSize, 1e-9));
-    std::fill(invScale_.begin() + b.firstVertex, invScale_.begin() + b.firstVertex + b.vertexCount, scale);
-  }
-}
+void World::setTolerance(double tolerance) { adaptive_.setTolerance(*model_, tolerance); }
+
 
 bool World::restingAt(std::size_t i) const {
   if (adaptive()) return state_.time - lastContactTime_[i] <= model_->colliders.restingWindow;
@@ -209,7 +178,7 @@ void World::step() {
     case Integrator::AdaptiveVerlet: stepAdaptiveVerlet(); break;
     case Integrator::Vbd: stepVbd(); break;
   }
-  if (!stepProblem_.empty()) return;  // the adaptive step found no step it could take
+  if (!adaptive_.problem().empty()) return;  // the adaptive step found no step it could take
   // Contact between and within bodies, over the whole step's paths.
   if (contacts_) {
     if (adaptive()) std::copy(state_.v.begin(), state_.v.end(), vBefore_.begin());
@@ -220,7 +189,7 @@ void World::step() {
       // step is kept short enough for that to stay within the tolerance.
       if (adaptive()) {
         const Vec3 *v = state_.v.data(), *vb = vBefore_.data();
-        const double* inv = invScale_.data();
+        const double* inv = adaptive_.inverseScale().data();
         const double h = dt_;
         std::atomic<double> worst{0.0};
         forVertices([&](std::size_t begin, std::size_t end) {
@@ -228,11 +197,11 @@ void World::step() {
                       largestOver(begin, end, [&](std::size_t i) { return length(v[i] - vb[i]) * 0.5 * h * inv[i]; }));
         });
         const double e = worst.load();
-        if (e > 1.0) hNext_ = std::min(hNext_, 0.9 * h / e);
+        adaptive_.limitAfterContact(h, e);
       }
     }
   }
-  state_.time = adaptive() && landed_ ? landAt_ : state_.time + dt_;
+  state_.time = adaptive() && adaptive_.landed() ? adaptive_.landAt() : state_.time + dt_;
   ++state_.steps;
   if (!tracked_.empty()) followPins();
 }
@@ -424,69 +393,7 @@ void World::setIterations(int iterations) {
   if (vbd_) vbd_->setIterations(iterations);
 }
 
-bool World::chooseStep(double& h, double& wanted) {
-  // The controller's step under the stability bound, shortened to land on the stop (or to halve
-  // what is left, so that no sliver of a step remains before it).
-  const double t = state_.time;
-  wanted = std::min(hNext_, stableStep_);
-  h = wanted;
-  landed_ = false;
-  landAt_ = stop_;
-  // A moving collider's keyframe ahead, before the stop, is landed on too (its velocity or
-  // acceleration jumps there).
-  const auto kink = std::upper_bound(kinks_.begin(), kinks_.end(), t);
-  if (kink != kinks_.end() && (!(stop_ > t) || *kink < stop_)) landAt_ = *kink;
-  if (landAt_ > t) {
-    const double left = landAt_ - t;
-    if (h >= left) {
-      h = left;
-      landed_ = true;
-    } else if (2.0 * h > left) {
-      h = 0.5 * left;
-    }
-  }
-  if (landed_ || h >= kMinAdaptiveStep) return true;
-  char text[320];
-  if (stableStep_ < kMinAdaptiveStep) {
-    std::snprintf(text, sizeof text,
-                  "at t = %.6g s the adaptive step fell below %.3g s: the stiffest mode is stable only below %.3g s; "
-                  "try longer periods (a softer material) or --integrator backward_euler",
-                  t, kMinAdaptiveStep, stableStep_ / kStableFraction);
-  } else {
-    std::snprintf(text, sizeof text,
-                  "at t = %.6g s the adaptive step fell below %.3g s without meeting the tolerance %.3g; try a larger "
-                  "--tolerance, or a fixed step (--integrator rk4 --dt ...)",
-                  t, kMinAdaptiveStep, tolerance_);
-  }
-  stepProblem_ = text;
-  return false;
-}
 
-bool World::judge(double h, double wanted, double embedded, bool afterRejection, double impactGiven) {
-  // A step whose candidate is not finite is taken: the monitor names the blow-up.
-  if (std::isnan(embedded)) {
-    accept(h, wanted, 1.0, 1.0, afterRejection);
-    return true;
-  }
-  double impact = 0.0;
-  if (!model_->colliders.empty() && embedded <= 1.0) impact = impactGiven >= 0.0 ? impactGiven : impactError(h);
-  if (embedded <= 1.0 && impact <= 1.0) {
-    // PI controller on the embedded error (local error ~ h^3 for both pairs: exponents 0.7/3
-    // and 0.4/3). The impact error grows like h^2 in sustained contact (the velocity a step
-    // stops grows like h) and like h at a first impact: the square root serves both (measured:
-    // with the inverse, four times as many steps were taken again).
-    const double e = std::max(embedded, 1e-10);
-    double factor = 0.9 * std::pow(e, -0.7 / 3.0) * std::pow(errorBefore_, 0.4 / 3.0);
-    if (impact > 0.0) factor = std::min(factor, 0.9 / std::sqrt(impact));
-    accept(h, wanted, std::clamp(factor, 0.2, 5.0), e, afterRejection);
-    return true;
-  }
-  ++stats_.rejected;
-  if (impact > 1.0) ++stats_.contactRejected;
-  const double factor = impact > 1.0 ? 0.9 / std::sqrt(impact) : 0.9 * std::pow(embedded, -1.0 / 3.0);
-  hNext_ = h * std::clamp(factor, 0.1, 0.9);
-  return false;
-}
 
 void World::stepBogackiShampine() {
   // Bogacki & Shampine, "A 3(2) pair of Runge-Kutta formulas", Appl. Math. Lett. 2 (1989):
@@ -500,7 +407,7 @@ void World::stepBogackiShampine() {
   const Vec3 *x = state_.x.data(), *v = state_.v.data();
   Vec3 *k1v = k1v_.data(), *k2x = k2x_.data(), *k2v = k2v_.data(), *k3x = k3x_.data(), *k3v = k3v_.data();
   Vec3 *xs = xs_.data(), *vs = vs_.data(), *xn = xn_.data(), *vn = vn_.data();
-  const double* inv = invScale_.data();
+  const double* inv = adaptive_.inverseScale().data();
   accelerations(x, v, t, k1v);
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
@@ -547,7 +454,7 @@ void World::stepAdaptiveVerlet() {
   if (!cachedAccelerationValid_) accelerations(x, v, t, k1v_.data());
   const Vec3* a0 = k1v_.data();
   Vec3 *a1 = k2v_.data(), *vs = vs_.data(), *xn = xn_.data(), *vn = vn_.data();
-  const double* inv = invScale_.data();
+  const double* inv = adaptive_.inverseScale().data();
   const bool contacts = !model_->colliders.empty();
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
@@ -594,7 +501,7 @@ double World::collideCandidate(std::size_t begin, std::size_t end, double h) {
   const Colliders& colliders = model_->colliders;
   const Vec3* x = state_.x.data();
   Vec3 *xn = xn_.data(), *vs = vs_.data();
-  const double* inv = invScale_.data();
+  const double* inv = adaptive_.inverseScale().data();
   const ColliderPoses* moving = poses();
   double worst = 0.0;
   for (std::size_t i = begin; i < end; ++i) {
@@ -614,34 +521,32 @@ double World::collideCandidate(std::size_t begin, std::size_t end, double h) {
   return worst;
 }
 
+
+void World::updateStableStep() {
+  adaptive_.updateStableStep(*forces_, state_.x, state_.invMass.data(), integrator_, evaluations_);
+}
+
+bool World::chooseStep(double& h, double& wanted) { return adaptive_.choose(state_.time, kinks_, h, wanted); }
+
+bool World::judge(double h, double wanted, double embedded, bool afterRejection, double impactGiven) {
+  double impact = 0.0;
+  if (!model_->colliders.empty() && embedded <= 1.0) impact = impactGiven >= 0.0 ? impactGiven : impactError(h);
+  double factor = 1.0, error = 1.0;
+  if (!adaptive_.judge(h, embedded, impact, factor, error)) return false;
+  accept(h, wanted, factor, error, afterRejection);
+  return true;
+}
+
 void World::accept(double h, double wanted, double factor, double error, bool afterRejection) {
-  // After a rejection the step does not grow again at once (Hairer & Wanner's rule).
-  if (afterRejection) factor = std::min(factor, 1.0);
-  errorBefore_ = error;
+  const bool boundDue = adaptive_.accept(h, wanted, factor, error, afterRejection);
   dt_ = h;
-  // A step shortened to land on the stop says little about the next one's length.
-  hNext_ = landed_ ? std::max(factor * h, std::min(factor, 1.0) * wanted) : factor * h;
-  stats_.largest = std::max(stats_.largest, h);
-  if (!landed_) {
-    stats_.smallest = stats_.accepted == stats_.landed ? h : std::min(stats_.smallest, h);
-  } else {
-    ++stats_.landed;
-  }
-  ++stats_.accepted;
   Vec3 *x = state_.x.data(), *v = state_.v.data();
   const Vec3 *xn = xn_.data(), *vn = vn_.data();
   lastPass([&](std::size_t i) {
     x[i] = xn[i];
     v[i] = vn[i];
   });
-  // Made again at the step's end shape, after 4 steps and 4 bound-steps of time: as often as
-  // every 4 steps while the steps are at the bound, less often while an impact or the tolerance
-  // keeps them far below it (a shape stiffens with time, not with steps; the bound's update was
-  // a third of an adaptive run).
-  ++sinceStableUpdate_;
-  sinceStableTime_ += h;
-  const bool due = sinceStableUpdate_ >= 4 && (!std::isfinite(stableStep_) || sinceStableTime_ >= 3.99 * stableStep_);
-  if (landed_ || due) updateStableStep();
+  if (boundDue) updateStableStep();
 }
 
 double World::impactMisplacement(const Vec3& velocity, const ContactHit& hit, bool resting, double h) const {
@@ -658,7 +563,7 @@ double World::impactError(double h) const {
   // stops its lowest vertices at every step, which is where most of a landing's error is made.
   const Colliders& colliders = model_->colliders;
   const Vec3 *x = state_.x.data(), *xn = xn_.data(), *vn = vn_.data();
-  const double* inv = invScale_.data();
+  const double* inv = adaptive_.inverseScale().data();
   std::atomic<double> worst{0.0};
   forVertices([&](std::size_t begin, std::size_t end) {
     foldLargest(worst, largestOver(begin, end, [&](std::size_t i) {

@@ -28,6 +28,7 @@
 #include <string_view>
 #include <vector>
 
+#include "sim/adaptive_step.h"
 #include "sim/contact.h"
 #include "sim/force_stages.h"
 #include "sim/integrators.h"
@@ -36,17 +37,8 @@
 
 namespace springy {
 
-// The adaptive integrator's step statistics (World::stepStats).
-struct StepStats {
-  uint64_t accepted = 0, rejected = 0;
-  uint64_t contactRejected = 0;          // of the rejected: for a predicted impact's error
-  double smallest = 0.0, largest = 0.0;  // accepted steps [s] (the smallest: not one shortened to land on a stop)
-  uint64_t landed = 0;                   // accepted steps shortened to land on a stop
-};
-
 class ImplicitSolver;
 class VbdSolver;
-class ModeEstimator;
 
 class World {
  public:
@@ -60,7 +52,7 @@ class World {
   void step();
   // One step toward `time`: the adaptive integrator lands on it exactly; a fixed step is dt.
   void stepToward(double time) {
-    stop_ = time;
+    adaptive_.setStop(time);
     step();
   }
   // Whether the state has reached `time`: exactly for the adaptive step, within half a step for
@@ -79,17 +71,17 @@ class World {
   // vertices, so the step sequence is bit-identical on any thread count. dt() is the next step.
   bool adaptive() const { return isAdaptive(integrator_); }
   void setTolerance(double tolerance);
-  double tolerance() const { return tolerance_; }
-  const StepStats& stepStats() const { return stats_; }
+  double tolerance() const { return adaptive_.tolerance(); }
+  const StepStats& stepStats() const { return adaptive_.stats(); }
   // Non-empty when the adaptive step could not meet its tolerance above kMinAdaptiveStep (the
   // run must stop; the message says when and what to try).
-  const std::string& stepProblem() const { return stepProblem_; }
-  static constexpr double kMinAdaptiveStep = 1e-9;  // [s]
+  const std::string& stepProblem() const { return adaptive_.problem(); }
+  static constexpr double kMinAdaptiveStep = AdaptiveStep::kMinStep;  // [s]
   // The adaptive step never exceeds this fraction of the stable step of its stiffest mode at the
   // current shape (updated every 4 steps and at every stop: a compressed body is stiffer). The
   // embedded estimate alone let a mode grow from round-off while it was still too small to see
   // (the hanging sphere's energy rose within 0.07 s at tolerance 1e-3).
-  static constexpr double kStableFraction = 0.9;
+  static constexpr double kStableFraction = AdaptiveStep::kStableFraction;
 
   // Runs the step on up to `requested` threads (the calling thread included). Fewer are used
   // when the model has under `minVerticesPerThread` vertices per thread: below about that the
@@ -204,7 +196,7 @@ class World {
   void stepBogackiShampine();
   void stepAdaptiveVerlet();
   // The adaptive steps' shared parts: the next step to try (false: none is long enough, the
-  // run must stop; stepProblem_ says why), and the verdict on a tried step from its embedded
+  // run must stop; stepProblem() says why), and the verdict on a tried step from its embedded
   // error and its impacts' (true: accepted and taken).
   bool chooseStep(double& h, double& wanted);
   // impactGiven >= 0: the impacts' error, already estimated (collideCandidate); otherwise impactError's.
@@ -236,20 +228,7 @@ class World {
   int restingSteps_ = 0;                // contact within this many steps is resting contact
   bool dampingLayers_ = false;          // a plane has a damping layer (soft ground)
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
-  // The adaptive step.
-  double tolerance_ = 1e-4;
-  double stop_ = 0.0;                    // stepToward's target (ignored when not ahead)
-  double errorBefore_ = 1.0;             // the last accepted step's error (the PI controller's memory)
-  double hNext_ = 0.0;                   // the controller's next step [s]
-  double stableStep_ = 0.0;              // its stability bound [s] (updateStableStep)
-  int sinceStableUpdate_ = 0;            // accepted steps since it was made
-  double sinceStableTime_ = 0.0;         // and their time [s]
-  std::unique_ptr<ModeEstimator> modes_;  // the stiffest mode, found again when the bound moves
-  double modeStep_ = 0.0;                // the step it allows [s]
-  double boundAtMode_ = 0.0;             // Gershgorin's step when it was found [s]
-  int sinceMode_ = 0;                    // bound updates since
-  bool landed_ = false;                  // the step in progress lands on landAt_
-  double landAt_ = 0.0;                  // stop_, or a moving collider's keyframe before it
+  AdaptiveStep adaptive_;  // the adaptive step's controller (sim/adaptive_step.h)
   // Colliders that move on their own: their poses over the step being taken, and the
   // keyframe times the adaptive step lands on.
   bool movingColliders_ = false;
@@ -266,12 +245,9 @@ class World {
   std::vector<TrackedPins> tracked_;
   // Puts the tracked pins where their motion has them at the state's time (and frees those due).
   void followPins();
-  std::vector<double> invScale_;         // per vertex: 1 / (tolerance x its body's rest size)
   std::vector<double> lastContactTime_;  // per vertex: when it last touched a static collider
   std::vector<Vec3> xn_, vn_, vBefore_;  // a step's candidate state; velocities before contact
   std::vector<uint8_t> candidateHit_;    // per vertex: the candidate touched a static collider
-  StepStats stats_;
-  std::string stepProblem_;
   std::unique_ptr<ImplicitSolver> implicit_;  // workspace of the backward Euler integrator
   std::unique_ptr<VbdSolver> vbd_;            // the vertex block descent integrator's
   std::unique_ptr<Forces> forces_;          // the force stages, their scratch and the threads

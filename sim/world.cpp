@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <set>
 
 #include "sim/error.h"
 #include "sim/implicit.h"
@@ -52,44 +51,18 @@ std::unique_ptr<const Model> finished(Model model) {
 }  // namespace
 
 World::World(Model model, Integrator integrator, double dt)
-    : model_(finished(std::move(model))), integrator_(integrator), dt_(dt) {
+    : model_(finished(std::move(model))), integrator_(integrator), dt_(dt), drivers_(*model_) {
   assert(dt > 0.0);
   dampingLayers_ = model_->colliders.dampingLayers();
-  movingColliders_ = model_->colliders.moving();
-  if (!integratorRefuses(integrator, movingColliders_, false).empty()) {
+  if (!integratorRefuses(integrator, drivers_.movingColliders(), false).empty()) {
     throw Error("colliders that move are not supported with " + std::string(integratorName(integrator)) +
                 " (its solve holds the colliders still); use rk4, verlet or an adaptive step (--tolerance)");
-  }
-  if (movingColliders_) kinks_ = model_->colliders.kinks();
-  // Vertices held hard to a collider ([[attach]]) follow it, not their body's pin track.
-  std::set<uint32_t> attachedHard;
-  for (const Model::PinTrack& track : model_->pinTracks) attachedHard.insert(track.vertices.begin(), track.vertices.end());
-  for (const Model::PinTrack& track : model_->pinTracks) {
-    TrackedPins& t = tracked_.emplace_back();
-    t.track = &track;
-    if (track.vertices.empty()) {
-      for (uint32_t i : model_->pinned) {
-        if (model_->body[i] == track.body && !attachedHard.count(i)) t.vertices.push_back(i);
-      }
-      for (uint32_t i : t.vertices) t.rest.push_back(model_->restPosition[i]);
-    } else {  // attached to a collider: kept where they are relative to it
-      t.vertices = track.vertices;
-      const Pose start = track.motion.pose(0.0);
-      for (uint32_t i : t.vertices) t.rest.push_back(track.motion.moves() ? start.inverse(model_->restPosition[i]) : model_->restPosition[i]);
-    }
-    for (double k : track.motion.kinks()) kinks_.push_back(k);
-    if (std::isfinite(track.release)) kinks_.push_back(track.release);
-  }
-  for (const Model::Attachment& a : model_->attachments) {
-    if (std::isfinite(a.release)) kinks_.push_back(a.release);
   }
   if (!integratorRefuses(integrator, false, !model_->attachments.empty()).empty()) {
     throw Error("soft attachments ([[attach]] with a period) are not supported with " +
                 std::string(integratorName(integrator)) +
                 " (its solve does not have them); use rk4, verlet or an adaptive step (--tolerance)");
   }
-  std::sort(kinks_.begin(), kinks_.end());
-  kinks_.erase(std::unique(kinks_.begin(), kinks_.end()), kinks_.end());
   forces_ = std::make_unique<Forces>(*model_);
   if (BodyContacts::needed(*model_)) contacts_ = std::make_unique<BodyContacts>(*model_);
 
@@ -97,7 +70,7 @@ World::World(Model model, Integrator integrator, double dt)
   state_.x = model_->restPosition;
   state_.v = model_->initialVelocity;
   state_.invMass = model_->invMass;
-  state_.released.assign(tracked_.size(), 0);
+  state_.released.assign(drivers_.pinTracks(), 0);
   forces_->setInverseMasses(state_.invMass.data());
   if (contacts_) contacts_->setInverseMasses(state_.invMass.data());
   followPins();
@@ -165,7 +138,7 @@ void World::step() {
     forVertices([&](std::size_t begin, std::size_t end) { std::copy(x + begin, x + end, xOld + begin); });
   }
   // The moving colliders over the step (the adaptive step sets them for each size it tries).
-  if (movingColliders_ && !adaptive()) model_->colliders.posesOver(state_.time, state_.time + dt_, poses_);
+  if (!adaptive()) drivers_.over(state_.time, state_.time + dt_);
   // Integrate; every integrator's last pass over the vertices resolves their contacts too.
   switch (integrator_) {
     case Integrator::ExplicitEuler: stepExplicitEuler(); break;
@@ -203,7 +176,7 @@ void World::step() {
   }
   state_.time = adaptive() && adaptive_.landed() ? adaptive_.landAt() : state_.time + dt_;
   ++state_.steps;
-  if (!tracked_.empty()) followPins();
+  if (drivers_.pinTracks() > 0) followPins();
 }
 
 void World::addAttachments(const Vec3* x, const Vec3* v, double t, Vec3* a) const {
@@ -235,26 +208,7 @@ void World::addAttachments(const Vec3* x, const Vec3* v, double t, Vec3* a) cons
 }
 
 void World::followPins() {
-  for (std::size_t p = 0; p < tracked_.size(); ++p) {
-    const TrackedPins& t = tracked_[p];
-    if (state_.released[p]) continue;
-    const Model::PinTrack& track = *t.track;
-    if (state_.time >= track.release) {
-      // Free from now on, at the velocity the motion gave them.
-      for (uint32_t i : t.vertices) state_.invMass[i] = 1.0 / model_->mass[i];
-      state_.released[p] = 1;
-      cachedAccelerationValid_ = false;
-      continue;
-    }
-    if (!track.motion.moves()) continue;
-    const Pose pose = track.motion.pose(state_.time);
-    for (std::size_t k = 0; k < t.vertices.size(); ++k) {
-      const uint32_t i = t.vertices[k];
-      state_.x[i] = pose.apply(t.rest[k]);
-      state_.v[i] = track.motion.velocityAt(state_.x[i], state_.time);
-    }
-    cachedAccelerationValid_ = false;
-  }
+  if (drivers_.follow(state_)) cachedAccelerationValid_ = false;
 }
 
 void World::stepExplicitEuler() {
@@ -412,7 +366,7 @@ void World::stepBogackiShampine() {
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
     if (!chooseStep(h, wanted)) return;
-    if (movingColliders_) model_->colliders.posesOver(state_.time, state_.time + h, poses_);
+    drivers_.over(state_.time, state_.time + h);
     const auto stage = [&](double c, const Vec3* kx, const Vec3* kv, Vec3* nextKx) {
       forVertices([&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
@@ -459,7 +413,7 @@ void World::stepAdaptiveVerlet() {
   for (bool rejected = false;; rejected = true) {
     double h = 0.0, wanted = 0.0;
     if (!chooseStep(h, wanted)) return;
-    if (movingColliders_) model_->colliders.posesOver(state_.time, state_.time + h, poses_);
+    drivers_.over(state_.time, state_.time + h);
     std::atomic<double> impactWorst{0.0};
     forVertices([&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
@@ -526,7 +480,9 @@ void World::updateStableStep() {
   adaptive_.updateStableStep(*forces_, state_.x, state_.invMass.data(), integrator_, evaluations_);
 }
 
-bool World::chooseStep(double& h, double& wanted) { return adaptive_.choose(state_.time, kinks_, h, wanted); }
+bool World::chooseStep(double& h, double& wanted) {
+  return adaptive_.choose(state_.time, drivers_.kinks(), h, wanted);
+}
 
 bool World::judge(double h, double wanted, double embedded, bool afterRejection, double impactGiven) {
   double impact = 0.0;

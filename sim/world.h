@@ -30,6 +30,7 @@
 
 #include "sim/adaptive_step.h"
 #include "sim/contact.h"
+#include "sim/drivers.h"
 #include "sim/force_stages.h"
 #include "sim/integrators.h"
 #include "sim/model.h"
@@ -229,20 +230,9 @@ class World {
   bool dampingLayers_ = false;          // a plane has a damping layer (soft ground)
   bool cachedAccelerationValid_ = false;  // velocity Verlet reuses a(t + dt) as the next a(t)
   AdaptiveStep adaptive_;  // the adaptive step's controller (sim/adaptive_step.h)
-  // Colliders that move on their own: their poses over the step being taken, and the
-  // keyframe times the adaptive step lands on.
-  bool movingColliders_ = false;
-  ColliderPoses poses_;
-  std::vector<double> kinks_;
-  const ColliderPoses* poses() const { return movingColliders_ ? &poses_ : nullptr; }
-  // Pins that move or are released (Model::pinTracks): their vertices and rest positions
-  // (released: State::released).
-  struct TrackedPins {
-    const Model::PinTrack* track = nullptr;
-    std::vector<uint32_t> vertices;
-    std::vector<Vec3> rest;
-  };
-  std::vector<TrackedPins> tracked_;
+  // What moves on its own: the colliders' poses over the step, the pin tracks, the landings.
+  Drivers drivers_;
+  const ColliderPoses* poses() const { return drivers_.poses(); }
   // Puts the tracked pins where their motion has them at the state's time (and frees those due).
   void followPins();
   std::vector<double> lastContactTime_;  // per vertex: when it last touched a static collider

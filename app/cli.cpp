@@ -75,7 +75,21 @@ void addRenderOverrides(CLI::App* cmd, RenderOverrides& o) {
 CommandLine::CommandLine() {
   app.require_subcommand(1);
   app.set_version_flag("--version", "springy 0.1");
+  // The subcommands, in the order --help lists them.
+  addCheck();
+  addExport();
+  addSuggest();
+  addStudy();
+  addRender();
+  addFrames();
+  addReport();
+  addSweep();
+  addRunTask();
+  addGather();
+}
 
+// Adds `check`: runs scenes and checks them; its outputs (trace, JSON, JUnit, export).
+void CommandLine::addCheck() {
   checkCmd = app.add_subcommand("check", "Run scenes headlessly and check stability; per-body report");
   checkCmd->add_option("scenes", check.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   addRunOptions(checkCmd, check.run, true);
@@ -91,7 +105,10 @@ CommandLine::CommandLine() {
   checkCmd->add_option("--export-format", check.exportFormat, "With --export DIR: pc2, glb or pvd")
       ->check(CLI::IsMember({"pc2", "glb", "pvd"}))
       ->capture_default_str();
+}
 
+// Adds `export`: a check whose motion is written for Blender, ParaView or a glTF viewer.
+void CommandLine::addExport() {
   exportCmd = app.add_subcommand(
       "export", "Simulate scenes (checked as `check` does) and write every frame of every body for Blender, "
                 "ParaView or a glTF viewer (docs/export.md)");
@@ -112,7 +129,10 @@ CommandLine::CommandLine() {
   addRunOptions(exportCmd, exportRun.run, true);
   exportCmd->add_option("--trace", exportRun.trace, "Also write check's per-frame trace (CSV)");
   exportCmd->add_option("--json", exportRun.json, "Also write check's per-body results as JSON");
+}
 
+// Adds `suggest`: the stability advisor's step and values for scenes.
+void CommandLine::addSuggest() {
   suggestCmd =
       app.add_subcommand("suggest", "Estimate stable dt and propose stable T, P, T_theta, P_theta for a scene");
   suggestCmd->add_option("scenes", suggest.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
@@ -122,7 +142,10 @@ CommandLine::CommandLine() {
                    "Volume fraction each body should keep through its first impact; suggest simulates the scene "
                    "to predict the squash, and the periods that keep this much (default 0.85)")
       ->check(kFraction);
+}
 
+// Adds `study`: the integrators' work-precision and stability studies.
+void CommandLine::addStudy() {
   studyCmd = app.add_subcommand(
       "study", "Work-precision study of the integrators (accuracy: before contact; contact: whole runs), or stability");
   studyCmd->add_option("kind", study.kind, "accuracy, contact or stability")
@@ -141,7 +164,10 @@ CommandLine::CommandLine() {
   studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
+}
 
+// Adds `render`: MP4 videos of scenes.
+void CommandLine::addRender() {
   renderCmd = app.add_subcommand("render", "Simulate scenes and encode MP4 videos (H.264)");
   renderCmd->add_option("scenes", render.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   renderCmd->add_option("-o,--output", render.output,
@@ -150,7 +176,10 @@ CommandLine::CommandLine() {
   addRenderOverrides(renderCmd, render.render);
   renderCmd->add_option("--crf", render.render.crf, "H.264 quality, 0-51, lower is better");
   renderCmd->add_option("--preset", render.render.preset, "x264 preset (ultrafast ... veryslow)");
+}
 
+// Adds `frames`: PNG stills and a contact sheet.
+void CommandLine::addFrames() {
   framesCmd = app.add_subcommand("frames", "Write PNG stills at chosen times, and a contact sheet");
   framesCmd->add_option("scenes", frames.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   framesCmd->add_option("-o,--output", frames.output, "Output directory")->capture_default_str();
@@ -159,7 +188,10 @@ CommandLine::CommandLine() {
   framesCmd->add_flag("--sheet-only", frames.sheetOnly, "Write only the contact sheet");
   addRunOptions(framesCmd, frames.run, false);
   addRenderOverrides(framesCmd, frames.render);
+}
 
+// Adds `report`: the HTML pages of scenes' runs, a sweep and a study.
+void CommandLine::addReport() {
   reportCmd = app.add_subcommand(
       "report", "Write HTML pages of scenes' runs (video, 3D replay, contact sheet, plots, check's table), a sweep "
                 "and a study, to open in a browser (docs/report.md)");
@@ -178,7 +210,10 @@ CommandLine::CommandLine() {
                         "max_penetration, steps, kinetic or elastic");
   reportCmd->add_option("--study", report.study, "A study's folder (springy study -o DIR): its pages and plots")
       ->check(CLI::ExistingDirectory);
+}
 
+// Adds `sweep`: a spec's tasks, run here or submitted to Slurm.
+void CommandLine::addSweep() {
   sweepCmd = app.add_subcommand("sweep", "Run a scene (or several) over a grid or list of settings (docs/sweeps.md)");
   sweepCmd->add_option("spec", sweep.spec, "Sweep spec (.toml)")->required()->check(CLI::ExistingFile);
   sweepCmd->add_option("-o,--output", sweep.output,
@@ -200,7 +235,10 @@ CommandLine::CommandLine() {
       ->add_option("--sbatch-arg", sweep.sbatchArgs,
                    "Slurm: one more sbatch option for both jobs, e.g. --sbatch-arg=--partition=debug (repeatable)")
       ->allow_extra_args(false);
+}
 
+// Adds `run-task`: runs one task of a sweep's manifest.
+void CommandLine::addRunTask() {
   runTaskCmd = app.add_subcommand("run-task", "Run one task of a sweep's manifest (skipped when already finished)");
   runTaskCmd->add_option("manifest", runTask.manifest, "The sweep's manifest.jsonl")->required();
   runTaskCmd
@@ -213,7 +251,10 @@ CommandLine::CommandLine() {
                    "Simulation threads, unless the task sets them (default: $SLURM_CPUS_PER_TASK, else as "
                    "every command)")
       ->check(CLI::Range(1u, 256u));
+}
 
+// Adds `gather`: collects a sweep's results into its table.
+void CommandLine::addGather() {
   gatherCmd = app.add_subcommand("gather", "Collect a sweep's results into its table (CSV, JSON) and map (PNG)");
   gatherCmd->add_option("manifest", gather.manifest, "The sweep's manifest.jsonl")->required();
 }

@@ -47,6 +47,20 @@ struct CommandLine {
   CLI::App* runTaskCmd = nullptr;
   CLI::App* gatherCmd = nullptr;
   CLI::App* reportCmd = nullptr;  // null without the renderer
+
+ private:
+  // Each adds its subcommand and the subcommand's options to `app` (app/cli.cpp); the constructor
+  // calls them in the order --help lists them.
+  void addCheck();
+  void addExport();
+  void addSuggest();
+  void addStudy();
+  void addRender();
+  void addFrames();
+  void addReport();
+  void addSweep();
+  void addRunTask();
+  void addGather();
 };
 
 // Parses `args` (without the program's name) into `cli`. Throws CLI::ParseError.

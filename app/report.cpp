@@ -17,6 +17,7 @@
 #include <cmark-gfm.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -489,11 +490,11 @@ std::string jsonText(const Json& v) {
   return v.dump();
 }
 
-void reportSweep(const fs::path& root, const ReportOptions& o, std::string& overview) {
-  const fs::path from(o.sweep);
+// A sweep's table (FROM/table.json), read and checked to hold tasks.
+Json readSweepTable(const fs::path& from, const std::string& sweepOption) {
   const fs::path tableFile = from / "table.json";
   if (!fs::exists(tableFile)) {
-    throw Error("--sweep " + o.sweep + ": no table.json there (is it a sweep's folder? `springy gather " +
+    throw Error("--sweep " + sweepOption + ": no table.json there (is it a sweep's folder? `springy gather " +
                 (from / "manifest.jsonl").string() + "` writes it)");
   }
   Json table;
@@ -503,132 +504,191 @@ void reportSweep(const fs::path& root, const ReportOptions& o, std::string& over
     throw Error(tableFile.string() + ": not a sweep's table: " + e.what());
   }
   if (!table.contains("tasks") || !table["tasks"].is_array()) throw Error(tableFile.string() + ": no \"tasks\" in it");
-  const Json& tasks = table["tasks"];
+  return table;
+}
+
+// What a sweep's page shows: the tasks' keys, those swept, and its plot's axes (a line per value
+// of `series`, the other swept key, when x is swept too).
+struct SweepAxes {
+  std::vector<std::string> keys, swept;
+  std::string x, y, series;
+};
+
+// The tasks' keys and the plot's axes, from --x and --y; throws for a key or figure the table lacks.
+SweepAxes sweepAxes(const Json& tasks, const ReportOptions& o) {
+  SweepAxes a;
   // The keys, in the first task's order; those that take more than one value are swept.
-  std::vector<std::string> keys;
   std::map<std::string, std::set<std::string>> values;
   for (const Json& t : tasks) {
     for (const auto& [key, value] : member(t, "point", false).items()) {
-      if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+      if (std::find(a.keys.begin(), a.keys.end(), key) == a.keys.end()) a.keys.push_back(key);
       values[key].insert(value.dump());
     }
   }
-  std::vector<std::string> swept;
-  for (const std::string& k : keys) {
-    if (values[k].size() > 1) swept.push_back(k);
+  for (const std::string& k : a.keys) {
+    if (values[k].size() > 1) a.swept.push_back(k);
   }
-  const std::string x = !o.x.empty() ? o.x : swept.empty() ? std::string() : swept[0];
-  if (!o.x.empty() && std::find(keys.begin(), keys.end(), o.x) == keys.end()) {
+  a.x = !o.x.empty() ? o.x : a.swept.empty() ? std::string() : a.swept[0];
+  if (!o.x.empty() && std::find(a.keys.begin(), a.keys.end(), o.x) == a.keys.end()) {
     std::string known;
-    for (const std::string& k : keys) known += (known.empty() ? "" : ", ") + k;
+    for (const std::string& k : a.keys) known += (known.empty() ? "" : ", ") + k;
     throw Error("--x " + o.x + ": the sweep has no such key (its keys: " + known + ")");
   }
-  const std::string y = o.y.empty() ? "volume_min" : o.y;
+  a.y = o.y.empty() ? "volume_min" : o.y;
   const std::vector<std::string> figures = {"volume_min", "volume_end", "max_strain", "max_penetration", "steps",
                                             "kinetic", "elastic"};
-  if (std::find(figures.begin(), figures.end(), y) == figures.end()) {
-    throw Error("--y " + y + ": not a figure of the table; give volume_min, volume_end, max_strain, max_penetration, "
+  if (std::find(figures.begin(), figures.end(), a.y) == figures.end()) {
+    throw Error("--y " + a.y + ": not a figure of the table; give volume_min, volume_end, max_strain, max_penetration, "
                 "steps, kinetic or elastic");
   }
-  const std::string series = std::find(swept.begin(), swept.end(), x) != swept.end() && swept.size() > 1
-                                 ? (swept[0] == x ? swept[1] : swept[0])
-                                 : std::string();
-  const fs::path dir = root / "sweep";
-  makeDirectories(dir.string(), "report");
+  a.series = std::find(a.swept.begin(), a.swept.end(), a.x) != a.swept.end() && a.swept.size() > 1
+                 ? (a.swept[0] == a.x ? a.swept[1] : a.swept[0])
+                 : std::string();
+  return a;
+}
 
-  std::string rows;
-  std::map<std::string, std::string> lines[2];  // per series value: the plot's points, ok and failed
-  int failed = 0;
-  for (const Json& t : tasks) {
-    const long index = t.value("task", -1L);
-    char name[32];
-    std::snprintf(name, sizeof name, "task-%04ld.html", index);
-    const std::string status = t.value("status", std::string("missing"));
-    const bool ok = status == "ok";
-    failed += ok ? 0 : 1;
-    const Json& point = member(t, "point", false);
-    rows += "<tr><td><a href=\"" + std::string(name) + "\">" + std::to_string(index) + "</a></td><td>" +
-            xmlEscaped(t.value("scene", std::string())) + "</td>";
-    for (const std::string& k : keys) rows += "<td>" + (point.contains(k) ? xmlEscaped(jsonText(point[k])) : "-") + "</td>";
-    rows += std::string("<td class=\"") + (ok ? "ok" : "bad") + "\">" + xmlEscaped(status) + "</td>";
-    for (const char* f : {"volume_min", "max_strain", "max_penetration", "steps"}) {
-      const std::optional<double> v = taskFigure(t, f);
-      rows += "<td>" + (v ? number(*v, std::strcmp(f, "steps") == 0 ? "%.0f" : "%.4g") : "-") + "</td>";
-    }
-    rows += "<td class=\"message\">" + xmlEscaped(t.value("message", std::string())) + "</td></tr>\n";
-    const std::optional<double> fy = taskFigure(t, y);
-    if (!x.empty() && point.contains(x) && point[x].is_number() && fy) {
-      const std::string s = series.empty() ? "" : point.contains(series) ? jsonText(point[series]) : "-";
-      lines[ok ? 0 : 1][s] += exact(point[x].get<double>()) + " " + exact(*fy) + "\n";
-    }
-    // The task's page: its point, command, result and log.
-    std::string page = pageHead("springy sweep task " + std::to_string(index), "../assets/");
-    page += "<header><h1>Task " + std::to_string(index) + " " + badge(ok, status) + "</h1><p>" +
-            xmlEscaped(t.value("scene", std::string())) + " &middot; <a href=\"index.html\">the sweep</a> &middot; <a "
-            "href=\"../index.html\">all of the report</a></p></header>\n<main>\n<section><h2>Point</h2><dl class=\"facts\">";
-    for (const auto& [k, v] : point.items()) page += "<dt>" + xmlEscaped(k) + "</dt><dd>" + xmlEscaped(jsonText(v)) + "</dd>";
-    page += "</dl>\n<h3>command</h3><pre>springy";
-    for (const Json& a : member(t, "command", true)) page += " " + xmlEscaped(jsonText(a));
-    page += "</pre>\n";
-    if (!t.value("message", std::string()).empty()) {
-      page += "<div class=\"message\">" + xmlEscaped(t.value("message", std::string())) + "</div>\n";
-    }
-    page += "</section>\n";
-    for (const Json& record : member(t, "records", true)) {
-      try {
-        const SceneRecord r = recordFromJson(record, tableFile.string());
-        page += "<section><h2>" + xmlEscaped(r.scene) + ": " + xmlEscaped(r.integrator) + ", step " + stepText(r) +
-                "</h2>\n" + checkTable(r, ReportOptions{}) + "</section>\n";
-      } catch (const Error&) {
-        // A record of another version: shown as data below.
-        page += "<section><pre>" + xmlEscaped(record.dump(2)) + "</pre></section>\n";
-      }
-    }
-    char logName[32];
-    std::snprintf(logName, sizeof logName, "logs/%04ld.log", index);
-    if (fs::exists(from / logName)) {
-      std::string log = readText(from / logName);
-      if (log.size() > 200000) log = log.substr(0, 200000) + "\n[... cut at 200 kB]\n";
-      page += "<section><h2>Log</h2><pre>" + xmlEscaped(log) + "</pre></section>\n";
-    }
-    page += "</main>\n</body>\n</html>\n";
-    writeText(dir / name, page);
-  }
+// A task's page in the sweep's folder: task-NNNN.html.
+std::string taskPageName(long index) {
+  char name[32];
+  std::snprintf(name, sizeof name, "task-%04ld.html", index);
+  return name;
+}
 
-  std::string plot;
-  if (!x.empty() && (!lines[0].empty() || !lines[1].empty())) {
-    std::string dat, plots;
-    int block = 0;
-    for (int failedLine = 0; failedLine < 2; ++failedLine) {
-      for (const auto& [s, points] : lines[failedLine]) {
-        dat += points + "\n\n";
-        const std::string title = (series.empty() ? std::string() : series + " = " + s) +
-                                  (failedLine ? std::string(series.empty() ? "" : ", ") + "failed" : "");
-        plots += std::string(plots.empty() ? "" : ", ") + "'sweep.dat' index " + std::to_string(block++) +
-                 (failedLine ? " with points pt 2 ps 1.5 lc rgb '#a4161a'" : " with linespoints lw 2 pt 7") +
-                 " title " + gnuplotText(title.empty() ? y : title);
-      }
-    }
-    writeText(dir / "sweep.dat", dat);
-    std::string gp = std::string("# springy report: ") + y + " against " + x + "\n" + kSvgTerminal +
-                     "set output 'sweep.svg'\nset xlabel " + gnuplotText(x) + "\nset ylabel " +
-                     gnuplotText(y + (y.rfind("volume", 0) == 0 ? " (lowest body)" : " (largest body)")) +
-                     "\nset title " + gnuplotText(y + " against " + x) + "\nplot " + plots + "\n";
-    writeText(dir / "sweep.gp", gp);
-    runGnuplot(dir / "sweep.gp");
-    plot = "<section><h2>" + xmlEscaped(y) + " against " + xmlEscaped(x) + "</h2><img src=\"sweep.svg\" alt=\"" +
-           xmlEscaped(y) + " against " + xmlEscaped(x) + "\" style=\"max-width:760px;width:100%\"><p class=\"files\">"
-           "<a href=\"sweep.dat\">sweep.dat</a>, <a href=\"sweep.gp\">sweep.gp</a>; another figure: "
-           "<code>springy report --sweep DIR --x KEY --y FIGURE</code></p></section>\n";
+// A task's row of the sweep's table: its page, scene, point, status, figures and message.
+std::string taskRow(const Json& t, long index, const std::string& status, bool ok,
+                    const std::vector<std::string>& keys) {
+  const Json& point = member(t, "point", false);
+  std::string row = "<tr><td><a href=\"" + taskPageName(index) + "\">" + std::to_string(index) + "</a></td><td>" +
+                    xmlEscaped(t.value("scene", std::string())) + "</td>";
+  for (const std::string& k : keys) {
+    row += "<td>" + (point.contains(k) ? xmlEscaped(jsonText(point[k])) : "-") + "</td>";
   }
+  row += std::string("<td class=\"") + (ok ? "ok" : "bad") + "\">" + xmlEscaped(status) + "</td>";
+  for (const char* f : {"volume_min", "max_strain", "max_penetration", "steps"}) {
+    const std::optional<double> v = taskFigure(t, f);
+    row += "<td>" + (v ? number(*v, std::strcmp(f, "steps") == 0 ? "%.0f" : "%.4g") : "-") + "</td>";
+  }
+  row += "<td class=\"message\">" + xmlEscaped(t.value("message", std::string())) + "</td></tr>\n";
+  return row;
+}
+
+// The plot's points ("x y" lines) per value of the series: [0] of the tasks that are ok, [1] of the rest.
+using SweepLines = std::array<std::map<std::string, std::string>, 2>;
+
+// Adds a task's point to its series' line, where the task has the figure and a number for x.
+void addSweepPoint(std::map<std::string, std::string>& lines, const Json& t, const SweepAxes& a) {
+  const Json& point = member(t, "point", false);
+  const std::optional<double> fy = taskFigure(t, a.y);
+  if (!a.x.empty() && point.contains(a.x) && point[a.x].is_number() && fy) {
+    const std::string s = a.series.empty() ? "" : point.contains(a.series) ? jsonText(point[a.series]) : "-";
+    lines[s] += exact(point[a.x].get<double>()) + " " + exact(*fy) + "\n";
+  }
+}
+
+// Writes a task's page: its point, command, result (check's tables) and log.
+void writeTaskPage(const fs::path& dir, const fs::path& from, const std::string& tableFile, const Json& t, long index,
+                   const std::string& status, bool ok) {
+  const Json& point = member(t, "point", false);
+  std::string page = pageHead("springy sweep task " + std::to_string(index), "../assets/");
+  page += "<header><h1>Task " + std::to_string(index) + " " + badge(ok, status) + "</h1><p>" +
+          xmlEscaped(t.value("scene", std::string())) + " &middot; <a href=\"index.html\">the sweep</a> &middot; <a "
+          "href=\"../index.html\">all of the report</a></p></header>\n<main>\n<section><h2>Point</h2><dl class=\"facts\">";
+  for (const auto& [k, v] : point.items()) {
+    page += "<dt>" + xmlEscaped(k) + "</dt><dd>" + xmlEscaped(jsonText(v)) + "</dd>";
+  }
+  page += "</dl>\n<h3>command</h3><pre>springy";
+  for (const Json& a : member(t, "command", true)) page += " " + xmlEscaped(jsonText(a));
+  page += "</pre>\n";
+  if (!t.value("message", std::string()).empty()) {
+    page += "<div class=\"message\">" + xmlEscaped(t.value("message", std::string())) + "</div>\n";
+  }
+  page += "</section>\n";
+  for (const Json& record : member(t, "records", true)) {
+    try {
+      const SceneRecord r = recordFromJson(record, tableFile);
+      page += "<section><h2>" + xmlEscaped(r.scene) + ": " + xmlEscaped(r.integrator) + ", step " + stepText(r) +
+              "</h2>\n" + checkTable(r, ReportOptions{}) + "</section>\n";
+    } catch (const Error&) {
+      // A record of another version: shown as data below.
+      page += "<section><pre>" + xmlEscaped(record.dump(2)) + "</pre></section>\n";
+    }
+  }
+  char logName[32];
+  std::snprintf(logName, sizeof logName, "logs/%04ld.log", index);
+  if (fs::exists(from / logName)) {
+    std::string log = readText(from / logName);
+    if (log.size() > 200000) log = log.substr(0, 200000) + "\n[... cut at 200 kB]\n";
+    page += "<section><h2>Log</h2><pre>" + xmlEscaped(log) + "</pre></section>\n";
+  }
+  page += "</main>\n</body>\n</html>\n";
+  writeText(dir / taskPageName(index), page);
+}
+
+// Writes the plot of y against x (sweep.dat, sweep.gp, and sweep.svg by gnuplot); returns its
+// section of the sweep's page, empty without a plot.
+std::string writeSweepPlot(const fs::path& dir, const SweepLines& lines, const SweepAxes& a) {
+  if (a.x.empty() || (lines[0].empty() && lines[1].empty())) return std::string();
+  std::string dat, plots;
+  int block = 0;
+  for (int failedLine = 0; failedLine < 2; ++failedLine) {
+    for (const auto& [s, points] : lines[failedLine]) {
+      dat += points + "\n\n";
+      const std::string title = (a.series.empty() ? std::string() : a.series + " = " + s) +
+                                (failedLine ? std::string(a.series.empty() ? "" : ", ") + "failed" : "");
+      plots += std::string(plots.empty() ? "" : ", ") + "'sweep.dat' index " + std::to_string(block++) +
+               (failedLine ? " with points pt 2 ps 1.5 lc rgb '#a4161a'" : " with linespoints lw 2 pt 7") +
+               " title " + gnuplotText(title.empty() ? a.y : title);
+    }
+  }
+  writeText(dir / "sweep.dat", dat);
+  std::string gp = std::string("# springy report: ") + a.y + " against " + a.x + "\n" + kSvgTerminal +
+                   "set output 'sweep.svg'\nset xlabel " + gnuplotText(a.x) + "\nset ylabel " +
+                   gnuplotText(a.y + (a.y.rfind("volume", 0) == 0 ? " (lowest body)" : " (largest body)")) +
+                   "\nset title " + gnuplotText(a.y + " against " + a.x) + "\nplot " + plots + "\n";
+  writeText(dir / "sweep.gp", gp);
+  runGnuplot(dir / "sweep.gp");
+  return "<section><h2>" + xmlEscaped(a.y) + " against " + xmlEscaped(a.x) + "</h2><img src=\"sweep.svg\" alt=\"" +
+         xmlEscaped(a.y) + " against " + xmlEscaped(a.x) + "\" style=\"max-width:760px;width:100%\"><p class=\"files\">"
+         "<a href=\"sweep.dat\">sweep.dat</a>, <a href=\"sweep.gp\">sweep.gp</a>; another figure: "
+         "<code>springy report --sweep DIR --x KEY --y FIGURE</code></p></section>\n";
+}
+
+// Writes the sweep's page: its plot and the table of its tasks, a row each.
+void writeSweepPage(const fs::path& dir, const fs::path& from, std::size_t tasks, int failed,
+                    const std::vector<std::string>& keys, const std::string& plot, const std::string& rows) {
   std::string page = pageHead("springy sweep " + from.filename().string(), "../assets/");
-  page += "<header><h1>Sweep " + xmlEscaped(from.filename().string()) + "</h1><p>" + std::to_string(tasks.size()) +
+  page += "<header><h1>Sweep " + xmlEscaped(from.filename().string()) + "</h1><p>" + std::to_string(tasks) +
           " tasks, " + std::to_string(failed) + " not ok &middot; <a href=\"../index.html\">all of the report</a>"
           "</p></header>\n<main>\n" + plot + "<section><h2>Tasks</h2>\n<table>\n<tr><th>task</th><th>scene</th>";
   for (const std::string& k : keys) page += "<th>" + xmlEscaped(k) + "</th>";
   page += "<th>status</th><th>volume min</th><th>max strain</th><th>max pen. [m]</th><th>steps</th><th>message</th>"
           "</tr>\n" + rows + "</table>\n</section>\n</main>\n</body>\n</html>\n";
   writeText(dir / "index.html", page);
+}
+
+// DIR/sweep/: a page per task and the sweep's page (a table and a plot); adds a link to the overview.
+void reportSweep(const fs::path& root, const ReportOptions& o, std::string& overview) {
+  const fs::path from(o.sweep);
+  Json table = readSweepTable(from, o.sweep);
+  const Json& tasks = table["tasks"];
+  const SweepAxes axes = sweepAxes(tasks, o);
+  const fs::path dir = root / "sweep";
+  makeDirectories(dir.string(), "report");
+
+  std::string rows;
+  SweepLines lines;
+  int failed = 0;
+  for (const Json& t : tasks) {
+    const long index = t.value("task", -1L);
+    const std::string status = t.value("status", std::string("missing"));
+    const bool ok = status == "ok";
+    failed += ok ? 0 : 1;
+    rows += taskRow(t, index, status, ok, axes.keys);
+    addSweepPoint(lines[ok ? 0 : 1], t, axes);
+    writeTaskPage(dir, from, (from / "table.json").string(), t, index, status, ok);
+  }
+  const std::string plot = writeSweepPlot(dir, lines, axes);
+  writeSweepPage(dir, from, tasks.size(), failed, axes.keys, plot, rows);
   overview += "<section><h2>Sweep</h2><p><a href=\"sweep/index.html\">" + xmlEscaped(from.filename().string()) +
               "</a>: " + std::to_string(tasks.size()) + " tasks, " + std::to_string(failed) +
               " not ok</p></section>\n";

@@ -172,6 +172,166 @@ void printSquash(const SceneDesc& scene, const Model& model, double keepVolume) 
   }
 }
 
+// A body's stability limit as its time constants are scaled: the advisor's bound on its springs
+// (sim/stability.h) for the integrator that limits it, over the scene's duration.
+struct BodyLimit {
+  const std::vector<RowBound>& rows;
+  Integrator limiting;
+  double duration;
+
+  // The largest stable step with the body's parameters scaled by `s`.
+  double dtMax(const ParameterScale& s) const { return bodyStability(rows, limiting, duration, s).dtMax; }
+};
+
+// Every time constant times f, and the strut period, strut decay, hinge period, hinge decay and
+// volume period times sp, sd, hp, hd and vp besides: a stiffness goes as 1 / T^2, a damping as 1 / T.
+ParameterScale scaled(double f, double sp, double sd, double hp, double hd, double vp = 1) {
+  return ParameterScale{1.0 / (f * f * sp * sp), 1.0 / (f * sd), 1.0 / (f * f * hp * hp), 1.0 / (f * hd),
+                        1.0 / (f * f * vp * vp)};
+}
+
+// "KEY = VALUE" for a suggested period or decay, or for the direct constant where the scene gives
+// one instead (scaled by directScale); a key ending in '=' (">=", "<=") takes no second one.
+std::string valueText(const char* periodKey, double period, const std::optional<double>& direct, const char* directKey,
+                      double directScale) {
+  std::ostringstream s;
+  const std::string key = direct ? directKey : periodKey;
+  s << key << (key.back() == '=' ? " " : " = ") << (direct ? *direct * directScale : period);
+  return s.str();
+}
+
+// The body material's advice: its struts follow stretch_period, its hinges bend_period; its
+// deformation damping (a rate per vertex, like drag) barely moves the limit.
+void printBodyMaterialAdvice(const BodyLimit& limit, const BodyInfo& info, double h) {
+  const bool hinges = info.hingeCount > 0;
+  const double bodyTarget = h / kSafety;
+  auto stable = [&](double sp, double bp) { return limit.dtMax(scaled(1, sp, 1, bp, 1)) >= bodyTarget; };
+  double fb = 1.0;
+  if (!stable(1.0, 1.0)) {
+    double hi = 2.0;
+    while (!stable(hi, hi) && hi < 1e6) hi *= 2;
+    fb = smallestStable([&](double x) { return stable(x, x); }, hi / 2, hi);
+  }
+  if (fb > 1.0) {
+    std::printf("    suggested for a step of %g s: stretch_period = %.4g, bend_period = %.4g (x %.3g)\n", h,
+                info.stretchPeriod * fb, info.bendPeriod * fb, fb);
+  }
+  const double gs = smallestStable([&](double g) { return stable(g * fb, fb); }, 1e-4, 1.0);
+  const double gb = hinges ? smallestStable([&](double g) { return stable(fb, g * fb); }, 1e-4, 1.0) : 1.0;
+  std::printf("    stiffest stable values at a step of %g s, one at a time: stretch_period >= %.4g", h,
+              info.stretchPeriod * fb * gs);
+  if (hinges) std::printf(", bend_period >= %.4g", info.bendPeriod * fb * gb);
+  std::printf("\n");
+}
+
+// The uniform scale f >= 1 of every time constant that makes the limit reach `target`: the limit
+// scales with f for the horizon-independent methods; bisect anyway (explicit Euler's depends on
+// the horizon).
+double uniformScale(const BodyLimit& limit, double target) {
+  if (limit.dtMax(scaled(1, 1, 1, 1, 1)) >= target) return 1.0;
+  double hi = 2.0;
+  while (!(limit.dtMax(scaled(hi, 1, 1, 1, 1)) >= target) && hi < 1e6) hi *= 2;
+  return smallestStable([&](double x) { return limit.dtMax(scaled(x, 1, 1, 1, 1)) >= target; }, hi / 2, hi);
+}
+
+// The factor in [1e-4, 1] of the stiffest stable value of one parameter alone (0 strut period,
+// 1 strut decay, 2 hinge period, 3 hinge decay, 4 volume period), the others at f times their value.
+double stiffestAlone(const BodyLimit& limit, double f, double target, int which) {
+  return smallestStable(
+      [&](double g) {
+        const double sp = which == 0 ? g : 1, sd = which == 1 ? g : 1, hp = which == 2 ? g : 1, hd = which == 3 ? g : 1,
+                     vp = which == 4 ? g : 1;
+        return limit.dtMax(scaled(f, sp, sd, hp, hd, vp)) >= target;
+      },
+      1e-4, 1.0);
+}
+
+// The element material's values with every time constant times f.
+void printScaledValues(const BodyDesc& desc, double f, bool hinges, bool gas) {
+  std::printf(
+      "      all time constants x %.3g: %s, %s", f,
+      valueText("strut_period", desc.strutPeriod * f, desc.strutStiffness, "strut_stiffness", 1 / (f * f)).c_str(),
+      valueText("strut_decay", desc.strutDecay * f, desc.strutDamping, "strut_damping", 1 / f).c_str());
+  if (hinges) {
+    std::printf(
+        ", %s, %s",
+        valueText("hinge_period", desc.hingePeriod * f, desc.hingeStiffness, "hinge_stiffness", 1 / (f * f)).c_str(),
+        valueText("hinge_decay", desc.hingeDecay * f, desc.hingeDamping, "hinge_damping", 1 / f).c_str());
+  }
+  if (gas) std::printf(", volume_period = %g", desc.volumePeriod * f);
+  std::printf("\n");
+}
+
+// The element material's stiffest stable value of each parameter alone, the others at f times their value.
+void printStiffestValues(const BodyLimit& limit, const BodyDesc& desc, double f, double target, bool hinges, bool gas) {
+  const double gp = stiffestAlone(limit, f, target, 0), gd = stiffestAlone(limit, f, target, 1);
+  std::printf("      stiffest stable values, one at a time: %s%s, %s%s", gp <= 1e-4 ? "any " : "",
+              valueText("strut_period >=", desc.strutPeriod * f * gp, desc.strutStiffness, "strut_stiffness <=",
+                        1 / (f * f * gp * gp)).c_str(),
+              gd <= 1e-4 ? "any " : "",
+              valueText("strut_decay >=", desc.strutDecay * f * gd, desc.strutDamping, "strut_damping <=", 1 / (f * gd))
+                  .c_str());
+  if (hinges) {
+    const double hp = stiffestAlone(limit, f, target, 2), hd = stiffestAlone(limit, f, target, 3);
+    std::printf(", %s%s, %s%s", hp <= 1e-4 ? "any " : "",
+                valueText("hinge_period >=", desc.hingePeriod * f * hp, desc.hingeStiffness, "hinge_stiffness <=",
+                          1 / (f * f * hp * hp)).c_str(),
+                hd <= 1e-4 ? "any " : "",
+                valueText("hinge_decay >=", desc.hingeDecay * f * hd, desc.hingeDamping, "hinge_damping <=",
+                          1 / (f * hd)).c_str());
+  }
+  if (gas) {
+    const double vp = stiffestAlone(limit, f, target, 4);
+    std::printf(", %svolume_period >= %g", vp <= 1e-4 ? "any " : "", desc.volumePeriod * f * vp);
+  }
+  std::printf("\n");
+}
+
+// The element material's advice: every time constant scaled to make the step stable, and the
+// stiffest value of each parameter alone.
+void printElementAdvice(const BodyLimit& limit, const BodyInfo& info, const BodyDesc& desc, double h) {
+  const bool hinges = info.hingeCount > 0, gas = info.gasPressure > 0.0;
+  const double target = h / kSafety;
+  const double f = uniformScale(limit, target);
+  std::printf("    suggested for a step of %g s%s:\n", h,
+              f > 1.0 ? "" : " (the current values are stable; the stiffest values follow)");
+  if (f > 1.0) printScaledValues(desc, f, hinges, gas);
+  printStiffestValues(limit, desc, f, target, hinges, gas);
+}
+
+// Prints body `bi`'s stability: its bounds, the largest stable step, and the values that make
+// the scene's step `h` stable.
+void adviseBody(const SceneDesc& scene, const Model& model, uint32_t bi, double h) {
+  const BodyInfo& info = model.bodies[bi];
+  const BodyDesc& desc = scene.bodies[bi];
+  const std::vector<RowBound> rows = gershgorinRows(model, model.restPosition.data(), bi);
+  const BodyLimit limit{rows, contactLimitedIntegrator(model, bi, scene.integrator), scene.duration};
+  const BodyStability now = bodyStability(rows, limit.limiting, scene.duration);
+  std::printf("  body '%s' (%u vertices, %u struts, %u hinges%s)\n", info.name.c_str(), info.vertexCount,
+              info.strutCount, info.hingeCount, info.gasPressure > 0.0 ? ", gas" : "");
+  std::printf("    omega_max <= %.4g rad/s (2/omega_max = %.4g s), damping rate <= %.4g 1/s\n", now.omegaMax,
+              now.omegaMax > 0 ? 2.0 / now.omegaMax : INFINITY, now.gammaMax);
+  if (!std::isfinite(now.dtMax)) {
+    std::printf("    %s is unconditionally stable on these springs: any dt and parameters\n",
+                std::string(integratorName(scene.integrator)).c_str());
+    return;
+  }
+  if (limit.limiting != scene.integrator) {
+    std::printf("    %s is stable at any step on these springs, but %s (sim/stability.h)\n",
+                std::string(integratorName(scene.integrator)).c_str(), kContactLimitReason);
+  }
+  const int substeps = safeSubsteps(scene.dt, now.dtMax, kSafety);
+  std::printf("    largest stable step with the current values: %.4g s -> %s (use dt <= %.4g s, or --substeps %d "
+              "with dt %g s)\n",
+              now.dtMax, h <= now.dtMax ? "the current step is stable" : "the current step is UNSTABLE",
+              kSafety * now.dtMax, substeps, scene.dt);
+  if (desc.material == MaterialModel::Body) {
+    printBodyMaterialAdvice(limit, info, h);
+  } else {
+    printElementAdvice(limit, info, desc, h);
+  }
+}
+
 }  // namespace
 
 int runSuggest(const SuggestOptions& options) {
@@ -190,121 +350,7 @@ int runSuggest(const SuggestOptions& options) {
     std::printf("%s: %s, integrator %s, dt %g s, %s (step %g s), horizon %g s\n", path.c_str(), scene.name.c_str(),
                 std::string(integratorName(scene.integrator)).c_str(), scene.dt, substepsText(scene.substeps).c_str(),
                 h, scene.duration);
-    for (uint32_t bi = 0; bi < model.bodies.size(); ++bi) {
-      const BodyInfo& info = model.bodies[bi];
-      const BodyDesc& desc = scene.bodies[bi];
-      const std::vector<RowBound> rows = gershgorinRows(model, model.restPosition.data(), bi);
-      const Integrator limiting = contactLimitedIntegrator(model, bi, scene.integrator);
-      auto limit = [&](const ParameterScale& s) { return bodyStability(rows, limiting, scene.duration, s).dtMax; };
-      const BodyStability now = bodyStability(rows, limiting, scene.duration);
-      std::printf("  body '%s' (%u vertices, %u struts, %u hinges%s)\n", info.name.c_str(), info.vertexCount,
-                  info.strutCount, info.hingeCount, info.gasPressure > 0.0 ? ", gas" : "");
-      std::printf("    omega_max <= %.4g rad/s (2/omega_max = %.4g s), damping rate <= %.4g 1/s\n", now.omegaMax,
-                  now.omegaMax > 0 ? 2.0 / now.omegaMax : INFINITY, now.gammaMax);
-      if (!std::isfinite(now.dtMax)) {
-        std::printf("    %s is unconditionally stable on these springs: any dt and parameters\n",
-                    std::string(integratorName(scene.integrator)).c_str());
-        continue;
-      }
-      if (limiting != scene.integrator) {
-        std::printf("    %s is stable at any step on these springs, but %s (sim/stability.h)\n",
-                    std::string(integratorName(scene.integrator)).c_str(), kContactLimitReason);
-      }
-      const int substeps = safeSubsteps(scene.dt, now.dtMax, kSafety);
-      std::printf("    largest stable step with the current values: %.4g s -> %s (use dt <= %.4g s, or --substeps %d "
-                  "with dt %g s)\n",
-                  now.dtMax, h <= now.dtMax ? "the current step is stable" : "the current step is UNSTABLE",
-                  kSafety * now.dtMax, substeps, scene.dt);
-      // Uniform scale f of every time constant: the limit scales with f for the
-      // horizon-independent methods; bisect anyway (explicit Euler's depends on the horizon).
-      auto scaled = [](double f, double sp, double sd, double hp, double hd, double vp = 1) {
-        return ParameterScale{1.0 / (f * f * sp * sp), 1.0 / (f * sd), 1.0 / (f * f * hp * hp), 1.0 / (f * hd),
-                              1.0 / (f * f * vp * vp)};
-      };
-      const double target = h / kSafety;
-      double f = 1.0;
-      if (!(limit(scaled(1, 1, 1, 1, 1)) >= target)) {
-        double hi = 2.0;
-        while (!(limit(scaled(hi, 1, 1, 1, 1)) >= target) && hi < 1e6) hi *= 2;
-        f = smallestStable([&](double x) { return limit(scaled(x, 1, 1, 1, 1)) >= target; }, hi / 2, hi);
-      }
-      auto value = [&](const char* periodKey, double period, const std::optional<double>& direct, const char* directKey,
-                       double directScale) {
-        std::ostringstream s;
-        const std::string key = direct ? directKey : periodKey;
-        s << key << (key.back() == '=' ? " " : " = ") << (direct ? *direct * directScale : period);
-        return s.str();
-      };
-      const bool hinges = info.hingeCount > 0, gas = info.gasPressure > 0.0;
-      if (desc.material == MaterialModel::Body) {
-        // The body material: its struts follow stretch_period, its hinges bend_period; its
-        // deformation damping (a rate per vertex, like drag) barely moves the limit.
-        const double bodyTarget = h / kSafety;
-        auto stable = [&](double sp, double bp) { return limit(scaled(1, sp, 1, bp, 1)) >= bodyTarget; };
-        double fb = 1.0;
-        if (!stable(1.0, 1.0)) {
-          double hi = 2.0;
-          while (!stable(hi, hi) && hi < 1e6) hi *= 2;
-          fb = smallestStable([&](double x) { return stable(x, x); }, hi / 2, hi);
-        }
-        if (fb > 1.0) {
-          std::printf("    suggested for a step of %g s: stretch_period = %.4g, bend_period = %.4g (x %.3g)\n", h,
-                      info.stretchPeriod * fb, info.bendPeriod * fb, fb);
-        }
-        const double gs = smallestStable([&](double g) { return stable(g * fb, fb); }, 1e-4, 1.0);
-        const double gb = hinges ? smallestStable([&](double g) { return stable(fb, g * fb); }, 1e-4, 1.0) : 1.0;
-        std::printf("    stiffest stable values at a step of %g s, one at a time: stretch_period >= %.4g", h,
-                    info.stretchPeriod * fb * gs);
-        if (hinges) std::printf(", bend_period >= %.4g", info.bendPeriod * fb * gb);
-        std::printf("\n");
-        continue;
-      }
-      std::printf("    suggested for a step of %g s%s:\n", h,
-                  f > 1.0 ? "" : " (the current values are stable; the stiffest values follow)");
-      if (f > 1.0) {
-        std::printf("      all time constants x %.3g: %s, %s", f,
-                    value("strut_period", desc.strutPeriod * f, desc.strutStiffness, "strut_stiffness", 1 / (f * f)).c_str(),
-                    value("strut_decay", desc.strutDecay * f, desc.strutDamping, "strut_damping", 1 / f).c_str());
-        if (hinges) {
-          std::printf(", %s, %s",
-                      value("hinge_period", desc.hingePeriod * f, desc.hingeStiffness, "hinge_stiffness", 1 / (f * f)).c_str(),
-                      value("hinge_decay", desc.hingeDecay * f, desc.hingeDamping, "hinge_damping", 1 / f).c_str());
-        }
-        if (gas) std::printf(", volume_period = %g", desc.volumePeriod * f);
-        std::printf("\n");
-      }
-      // The stiffest value of each parameter alone, the others at f times their value.
-      auto alone = [&](int which) {
-        return smallestStable(
-            [&](double g) {
-              const double sp = which == 0 ? g : 1, sd = which == 1 ? g : 1, hp = which == 2 ? g : 1, hd = which == 3 ? g : 1,
-                           vp = which == 4 ? g : 1;
-              return limit(scaled(f, sp, sd, hp, hd, vp)) >= target;
-            },
-            1e-4, 1.0);
-      };
-      const double gp = alone(0), gd = alone(1);
-      std::printf("      stiffest stable values, one at a time: %s%s, %s%s", gp <= 1e-4 ? "any " : "",
-                  value("strut_period >=", desc.strutPeriod * f * gp, desc.strutStiffness, "strut_stiffness <=",
-                        1 / (f * f * gp * gp)).c_str(),
-                  gd <= 1e-4 ? "any " : "",
-                  value("strut_decay >=", desc.strutDecay * f * gd, desc.strutDamping, "strut_damping <=", 1 / (f * gd))
-                      .c_str());
-      if (hinges) {
-        const double hp = alone(2), hd = alone(3);
-        std::printf(", %s%s, %s%s", hp <= 1e-4 ? "any " : "",
-                    value("hinge_period >=", desc.hingePeriod * f * hp, desc.hingeStiffness, "hinge_stiffness <=",
-                          1 / (f * f * hp * hp)).c_str(),
-                    hd <= 1e-4 ? "any " : "",
-                    value("hinge_decay >=", desc.hingeDecay * f * hd, desc.hingeDamping, "hinge_damping <=", 1 / (f * hd))
-                        .c_str());
-      }
-      if (gas) {
-        const double vp = alone(4);
-        std::printf(", %svolume_period >= %g", vp <= 1e-4 ? "any " : "", desc.volumePeriod * f * vp);
-      }
-      std::printf("\n");
-    }
+    for (uint32_t bi = 0; bi < model.bodies.size(); ++bi) adviseBody(scene, model, bi, h);
     printSquash(scene, model, options.keepVolume);
   }
   return failures == 0 ? 0 : 1;

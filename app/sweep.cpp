@@ -443,102 +443,150 @@ pid_t spawnTask(const std::string& exe, const SweepTask& task, unsigned threads)
   return pid;
 }
 
-// Runs the unfinished tasks, `jobs` at a time and no more threads than cores in all; each task a
-// run-task child with its output in its log. Progress lines come in task order. Returns the exit
-// status.
-int runLocally(const std::vector<SweepTask>& tasks, unsigned jobs) {
-  const unsigned cores = usableCores();
-  std::vector<const SweepTask*> pending;
-  for (const SweepTask& t : tasks) {
-    if (!finishedResult(t)) pending.push_back(&t);
+// A task's run-task child: its task, the threads it holds and when it started.
+struct RunningTask {
+  const SweepTask* task;
+  unsigned threads;
+  std::chrono::steady_clock::time_point start;
+};
+
+// The local runner's state (runLocally): the unfinished tasks, `slots` at a time with `threadsEach`
+// threads each, the children running, and the progress lines not yet printed.
+class LocalRunner {
+ public:
+  LocalRunner(const std::vector<SweepTask>& tasks, unsigned jobs);
+  LocalRunner(const LocalRunner&) = delete;
+  LocalRunner& operator=(const LocalRunner&) = delete;
+
+  // Runs the unfinished tasks and gathers the results; returns the exit status.
+  int run();
+
+ private:
+  // Starts pending tasks while a slot is free and the cores have room for their threads.
+  void startTasks();
+  // After an interruption: stops the children, waits for them and says how to resume; returns the exit status.
+  int stop();
+  // Takes a child that ended: its task's progress line, printed when the tasks before it are.
+  void finish(pid_t pid, int status);
+  // Prints the finished tasks' lines that come next in task order.
+  void flushLines();
+
+  const std::vector<SweepTask>& tasks_;
+  const unsigned cores_;
+  std::vector<const SweepTask*> pending_;
+  unsigned slots_ = 0, threadsEach_ = 0;
+  std::string exe_;
+  std::map<pid_t, RunningTask> running_;
+  std::map<long, std::string> lines_;  // finished, not yet printed (they print in task order)
+  std::size_t next_ = 0, printed_ = 0, failedToRun_ = 0;
+  unsigned busy_ = 0;
+};
+
+LocalRunner::LocalRunner(const std::vector<SweepTask>& tasks, unsigned jobs) : tasks_(tasks), cores_(usableCores()) {
+  for (const SweepTask& t : tasks_) {
+    if (!finishedResult(t)) pending_.push_back(&t);
   }
-  const std::size_t done = tasks.size() - pending.size();
-  if (jobs == 0) jobs = cores;
-  const unsigned slots = static_cast<unsigned>(std::min<std::size_t>(jobs, std::max<std::size_t>(pending.size(), 1)));
-  const unsigned threadsEach = std::max(1u, cores / slots);
+  if (jobs == 0) jobs = cores_;
+  slots_ = static_cast<unsigned>(std::min<std::size_t>(jobs, std::max<std::size_t>(pending_.size(), 1)));
+  threadsEach_ = std::max(1u, cores_ / slots_);
+}
+
+int LocalRunner::run() {
+  const std::size_t done = tasks_.size() - pending_.size();
   std::printf("sweep: %zu tasks, %zu finished already, running %zu: %u at a time, %u thread%s each, on %u cores\n",
-              tasks.size(), done, pending.size(), slots, threadsEach, threadsEach == 1 ? "" : "s", cores);
+              tasks_.size(), done, pending_.size(), slots_, threadsEach_, threadsEach_ == 1 ? "" : "s", cores_);
   std::fflush(stdout);
-  const std::string exe = selfExecutable();
-  struct Running {
-    const SweepTask* task;
-    unsigned threads;
-    std::chrono::steady_clock::time_point start;
-  };
-  std::map<pid_t, Running> running;
-  std::map<long, std::string> lines;  // finished, not yet printed (they print in task order)
-  std::size_t next = 0, printed = 0, failedToRun = 0;
-  unsigned busy = 0;
-  const auto flushLines = [&] {
-    while (printed < pending.size() && lines.count(pending[printed]->index)) {
-      std::printf("%s\n", lines[pending[printed]->index].c_str());
-      ++printed;
-    }
-    std::fflush(stdout);
-  };
-  while (next < pending.size() || !running.empty()) {
-    while (!interrupted() && next < pending.size() && running.size() < slots) {
-      const SweepTask& t = *pending[next];
-      const unsigned own = ownThreads(t);
-      const unsigned need = std::min(own ? own : threadsEach, cores);
-      if (!running.empty() && busy + need > cores) break;  // a task asking for many threads waits for room
-      running[spawnTask(exe, t, own ? 0 : threadsEach)] = {&t, need, std::chrono::steady_clock::now()};
-      busy += need;
-      ++next;
-    }
+  exe_ = selfExecutable();
+  while (next_ < pending_.size() || !running_.empty()) {
+    startTasks();
     int status = 0;
     const pid_t pid = waitpid(-1, &status, WNOHANG);
     if (pid <= 0) {
-      if (interrupted()) {
-        for (const auto& [child, r] : running) kill(child, SIGTERM);
-        while (!running.empty()) {
-          const pid_t gone = waitpid(-1, &status, 0);
-          if (gone < 0 && errno != EINTR) break;
-          running.erase(gone);
-        }
-        std::fprintf(stderr, "springy sweep: interrupted; %zu of %zu tasks finished, run the sweep again to resume\n",
-                     static_cast<std::size_t>(std::count_if(
-                         tasks.begin(), tasks.end(), [](const SweepTask& t) { return finishedResult(t).has_value(); })),
-                     tasks.size());
-        return interruptedExitStatus();
-      }
+      if (interrupted()) return stop();
       std::vector<pid_t> children;
-      for (const auto& [child, r] : running) children.push_back(child);
+      for (const auto& [child, r] : running_) children.push_back(child);
       waitForAChild(children);
       continue;
     }
-    const auto it = running.find(pid);
-    if (it == running.end()) continue;
-    const Running r = it->second;
-    running.erase(it);
-    busy -= r.threads;
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.start).count();
-    const std::optional<Json> result = finishedResult(*r.task);
-    char head[64];
-    std::snprintf(head, sizeof head, "[%ld/%zu] ", r.task->index + 1, tasks.size());
-    std::string line = head + describe(*r.task) + ": ";
-    if (result) {
-      line += (*result)["status"].get<std::string>();
-      // The message's first sentence (the table has all of it).
-      const std::string message = (*result)["message"].get<std::string>();
-      if (!message.empty()) line += " (" + message.substr(0, message.find(". ")) + ")";
-    } else {
-      ++failedToRun;
-      line += WIFSIGNALED(status) ? "run-task killed by signal " + std::to_string(WTERMSIG(status))
-                                  : "run-task failed (exit " + std::to_string(WEXITSTATUS(status)) + ")";
-      line += ", no result; see " + r.task->log;
-    }
-    char time[32];
-    std::snprintf(time, sizeof time, ", %.2f s", seconds);
-    lines[r.task->index] = line + time;
-    flushLines();
+    finish(pid, status);
   }
-  const std::size_t missing = gatherSweep(tasks);
-  if (failedToRun > 0 || missing > 0) {
+  const std::size_t missing = gatherSweep(tasks_);
+  if (failedToRun_ > 0 || missing > 0) {
     std::fprintf(stderr, "springy sweep: %zu tasks have no result; run the sweep again to retry them\n", missing);
     return 1;
   }
   return 0;
+}
+
+void LocalRunner::startTasks() {
+  while (!interrupted() && next_ < pending_.size() && running_.size() < slots_) {
+    const SweepTask& t = *pending_[next_];
+    const unsigned own = ownThreads(t);
+    const unsigned need = std::min(own ? own : threadsEach_, cores_);
+    if (!running_.empty() && busy_ + need > cores_) break;  // a task asking for many threads waits for room
+    running_[spawnTask(exe_, t, own ? 0 : threadsEach_)] = {&t, need, std::chrono::steady_clock::now()};
+    busy_ += need;
+    ++next_;
+  }
+}
+
+int LocalRunner::stop() {
+  int status = 0;
+  for (const auto& [child, r] : running_) kill(child, SIGTERM);
+  while (!running_.empty()) {
+    const pid_t gone = waitpid(-1, &status, 0);
+    if (gone < 0 && errno != EINTR) break;
+    running_.erase(gone);
+  }
+  std::fprintf(stderr, "springy sweep: interrupted; %zu of %zu tasks finished, run the sweep again to resume\n",
+               static_cast<std::size_t>(std::count_if(
+                   tasks_.begin(), tasks_.end(), [](const SweepTask& t) { return finishedResult(t).has_value(); })),
+               tasks_.size());
+  return interruptedExitStatus();
+}
+
+void LocalRunner::finish(pid_t pid, int status) {
+  const auto it = running_.find(pid);
+  if (it == running_.end()) return;
+  const RunningTask r = it->second;
+  running_.erase(it);
+  busy_ -= r.threads;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - r.start).count();
+  const std::optional<Json> result = finishedResult(*r.task);
+  char head[64];
+  std::snprintf(head, sizeof head, "[%ld/%zu] ", r.task->index + 1, tasks_.size());
+  std::string line = head + describe(*r.task) + ": ";
+  if (result) {
+    line += (*result)["status"].get<std::string>();
+    // The message's first sentence (the table has all of it).
+    const std::string message = (*result)["message"].get<std::string>();
+    if (!message.empty()) line += " (" + message.substr(0, message.find(". ")) + ")";
+  } else {
+    ++failedToRun_;
+    line += WIFSIGNALED(status) ? "run-task killed by signal " + std::to_string(WTERMSIG(status))
+                                : "run-task failed (exit " + std::to_string(WEXITSTATUS(status)) + ")";
+    line += ", no result; see " + r.task->log;
+  }
+  char time[32];
+  std::snprintf(time, sizeof time, ", %.2f s", seconds);
+  lines_[r.task->index] = line + time;
+  flushLines();
+}
+
+void LocalRunner::flushLines() {
+  while (printed_ < pending_.size() && lines_.count(pending_[printed_]->index)) {
+    std::printf("%s\n", lines_[pending_[printed_]->index].c_str());
+    ++printed_;
+  }
+  std::fflush(stdout);
+}
+
+// Runs the unfinished tasks, `jobs` at a time and no more threads than cores in all; each task a
+// run-task child with its output in its log. Progress lines come in task order. Returns the exit
+// status.
+int runLocally(const std::vector<SweepTask>& tasks, unsigned jobs) {
+  LocalRunner runner(tasks, jobs);
+  return runner.run();
 }
 
 // `text` quoted for sh.
@@ -675,6 +723,83 @@ long taskIndex(const RunTaskOptions& options) {
   throw Error("run-task: no --index, and none of SLURM_ARRAY_TASK_ID, JOB_COMPLETION_INDEX, PARALLEL_SEQ is set");
 }
 
+// The task's command, with --threads from run-task's --threads, else $SLURM_CPUS_PER_TASK, unless
+// the command sets them.
+std::vector<std::string> taskArguments(const SweepTask& task, const RunTaskOptions& options) {
+  std::vector<std::string> args = task.command;
+  if (std::find(args.begin(), args.end(), "--threads") == args.end()) {
+    std::string threads = options.threads ? std::to_string(*options.threads) : std::string();
+    if (const char* slurm = std::getenv("SLURM_CPUS_PER_TASK"); threads.empty() && slurm && *slurm) threads = slurm;
+    if (!threads.empty()) args.insert(args.end(), {"--threads", threads});
+  }
+  return args;
+}
+
+// Runs a task's command in this process, as main() would, with its standard error captured (and
+// passed on); check's records go to `records`, its last error line to `message`. Returns the
+// command's exit status (1 where it threw).
+int runTaskCommand(const std::vector<std::string>& args, std::vector<SceneRecord>& records, std::string& message) {
+  int status = 1;
+  StderrCapture capture;
+  CommandLine cli;
+  try {
+    parseCommandLine(cli, args);
+    cli.check.records = &records;
+    status = cli.dispatch();
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "springy run-task: " << e.what() << "\n";
+  } catch (const Error& e) {
+    std::cerr << "springy: " << e.what() << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "springy: unexpected error: " << e.what() << "\n";
+  }
+  std::fflush(stdout);
+  message = lastErrorLine(capture.finish());
+  return status;
+}
+
+// The task's state: ok or failed by its exit status; for check, its records' worst status (error
+// without records), and the message of the first record that is not ok in place of `message`.
+std::string taskState(const SweepTask& task, int status, const std::vector<SceneRecord>& records,
+                      std::string& message) {
+  std::string state = status == 0 ? "ok" : "failed";
+  if (task.command.front() == "check") {
+    state = records.empty() ? "error" : "ok";
+    message = records.empty() ? message : "";
+    for (const SceneRecord& r : records) {
+      if (r.status == SceneRecord::Status::Ok) continue;
+      if (state == "ok" || r.status == SceneRecord::Status::Error) state = statusName(r.status);
+      if (message.empty()) message = r.message;
+    }
+  }
+  return state;
+}
+
+// The task's result file's content: its command, state, exit status, message, check's records,
+// and the files in its output directory.
+Json taskResult(long index, const SweepTask& task, const std::string& state, int status, const std::string& message,
+                const std::vector<SceneRecord>& records) {
+  Json result;
+  result["task"] = index;
+  result["command"] = task.command;
+  result["status"] = state;
+  result["exit"] = status;
+  result["message"] = message;
+  result["records"] = Json::array();
+  for (const SceneRecord& r : records) result["records"].push_back(toJson(r));
+  result["outputs"] = Json::array();
+  if (!task.directory.empty() && isDirectory(task.directory)) {
+    std::vector<std::string> files;
+    for (const auto& entry : fs::directory_iterator(task.directory)) {
+      if (entry.path().filename().string().front() != '.')
+        files.push_back((fs::path(task.directory) / entry.path().filename()).string());
+    }
+    std::sort(files.begin(), files.end());
+    result["outputs"] = files;
+  }
+  return result;
+}
+
 }  // namespace
 
 std::string enterManifestDirectory(const std::string& manifest) {
@@ -788,12 +913,7 @@ int runTask(const RunTaskOptions& options) {
     std::printf("task %ld: finished already (%s)\n", index, task.result.c_str());
     return 0;
   }
-  std::vector<std::string> args = task.command;
-  if (std::find(args.begin(), args.end(), "--threads") == args.end()) {
-    std::string threads = options.threads ? std::to_string(*options.threads) : std::string();
-    if (const char* slurm = std::getenv("SLURM_CPUS_PER_TASK"); threads.empty() && slurm && *slurm) threads = slurm;
-    if (!threads.empty()) args.insert(args.end(), {"--threads", threads});
-  }
+  const std::vector<std::string> args = taskArguments(task, options);
   makeDirectories(fs::path(task.result).parent_path().string(), "results");
   AtomicFile resultFile(task.result);  // an unwritable result fails before the work
   std::printf("task %ld: springy", index);
@@ -802,58 +922,14 @@ int runTask(const RunTaskOptions& options) {
   std::fflush(stdout);
 
   std::vector<SceneRecord> records;
-  int status = 1;
   std::string message;
-  {
-    StderrCapture capture;
-    CommandLine cli;
-    try {
-      parseCommandLine(cli, args);
-      cli.check.records = &records;
-      status = cli.dispatch();
-    } catch (const CLI::ParseError& e) {
-      std::cerr << "springy run-task: " << e.what() << "\n";
-    } catch (const Error& e) {
-      std::cerr << "springy: " << e.what() << "\n";
-    } catch (const std::exception& e) {
-      std::cerr << "springy: unexpected error: " << e.what() << "\n";
-    }
-    std::fflush(stdout);
-    message = lastErrorLine(capture.finish());
-  }
+  const int status = runTaskCommand(args, records, message);
   if (interrupted()) {
     std::cerr << "springy run-task: task " << index << " interrupted; no result\n";
     return interruptedExitStatus();
   }
-  std::string state = status == 0 ? "ok" : "failed";
-  if (task.command.front() == "check") {
-    state = records.empty() ? "error" : "ok";
-    message = records.empty() ? message : "";
-    for (const SceneRecord& r : records) {
-      if (r.status == SceneRecord::Status::Ok) continue;
-      if (state == "ok" || r.status == SceneRecord::Status::Error) state = statusName(r.status);
-      if (message.empty()) message = r.message;
-    }
-  }
-  Json result;
-  result["task"] = index;
-  result["command"] = task.command;
-  result["status"] = state;
-  result["exit"] = status;
-  result["message"] = message;
-  result["records"] = Json::array();
-  for (const SceneRecord& r : records) result["records"].push_back(toJson(r));
-  result["outputs"] = Json::array();
-  if (!task.directory.empty() && isDirectory(task.directory)) {
-    std::vector<std::string> files;
-    for (const auto& entry : fs::directory_iterator(task.directory)) {
-      if (entry.path().filename().string().front() != '.')
-        files.push_back((fs::path(task.directory) / entry.path().filename()).string());
-    }
-    std::sort(files.begin(), files.end());
-    result["outputs"] = files;
-  }
-  resultFile.write(result.dump(2) + "\n");
+  const std::string state = taskState(task, status, records, message);
+  resultFile.write(taskResult(index, task, state, status, message, records).dump(2) + "\n");
   resultFile.commit();
   std::printf("task %ld: %s%s%s\n", index, state.c_str(), message.empty() ? "" : ": ", message.c_str());
   // Recorded, whatever the check found: a scheduler's afterok then still runs the gather.

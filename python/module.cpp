@@ -444,12 +444,8 @@ RenderOverrides renderOverridesOf(std::optional<int> width, std::optional<int> h
   return r;
 }
 
-}  // namespace
-}  // namespace springy
-
-PYBIND11_MODULE(_springy, m) {
-  using namespace springy;
-  m.doc() = "springy's C++ core (use the springy package: docs/python.md)";
+// Registers springy's exceptions: Error (a ValueError), RenderError and Unstable (RuntimeErrors).
+void defineErrors(py::module_& m) {
   py::register_exception<Error>(m, "Error", PyExc_ValueError);
   py::register_exception<render::RenderError>(m, "RenderError", PyExc_RuntimeError);
   gUnstable = PyErr_NewExceptionWithDoc(
@@ -458,24 +454,30 @@ PYBIND11_MODULE(_springy, m) {
       "attributes body, body_name, time, step, message, criterion, record.",
       PyExc_RuntimeError, nullptr);
   m.add_object("Unstable", py::handle(gUnstable));
+}
 
-  py::class_<Simulation>(m, "Simulation")
-      .def(py::init([](const std::string& path, const std::vector<std::string>& sets,
-                       const std::map<std::string, std::string>& options, bool quiet) {
-             RunOptions o = runOptionsOf(sets, options);
-             py::gil_scoped_release release;  // the advisor may survey the step
-             std::optional<CerrSilence> silence;
-             if (quiet) silence.emplace();
-             return std::make_unique<Simulation>(path, std::move(o));
-           }),
-           py::arg("path"), py::arg("sets"), py::arg("options"), py::arg("quiet"))
+// Simulation's construction and its calls that run, check and render it.
+void defineSimulationRuns(py::class_<Simulation>& cls) {
+  cls.def(py::init([](const std::string& path, const std::vector<std::string>& sets,
+                      const std::map<std::string, std::string>& options, bool quiet) {
+            RunOptions o = runOptionsOf(sets, options);
+            py::gil_scoped_release release;  // the advisor may survey the step
+            std::optional<CerrSilence> silence;
+            if (quiet) silence.emplace();
+            return std::make_unique<Simulation>(path, std::move(o));
+          }),
+          py::arg("path"), py::arg("sets"), py::arg("options"), py::arg("quiet"))
       .def("run", &Simulation::run, py::arg("until"))
       .def("step", &Simulation::step, py::arg("n") = 1, py::arg("check") = true)
       .def("check", &Simulation::check, py::arg("min_volume") = py::none(), py::arg("end_volume") = py::none(),
            py::arg("end_at_rest") = py::none())
       .def("render", &Simulation::render, py::arg("width"), py::arg("height"), py::arg("overlay"),
-           py::arg("shadows"), py::arg("antialias"))
-      .def_property_readonly("time", [](const Simulation& s) { return s.world().time(); })
+           py::arg("shadows"), py::arg("antialias"));
+}
+
+// Simulation's read-only properties: its clock, its settings and its state's hash.
+void defineSimulationProperties(py::class_<Simulation>& cls) {
+  cls.def_property_readonly("time", [](const Simulation& s) { return s.world().time(); })
       .def_property_readonly("dt", [](const Simulation& s) { return s.world().dt(); })
       .def_property_readonly("steps", [](const Simulation& s) { return s.world().stepCount(); })
       .def_property_readonly("force_evaluations", [](const Simulation& s) { return s.world().forceEvaluations(); })
@@ -488,20 +490,24 @@ PYBIND11_MODULE(_springy, m) {
       .def_property_readonly("name", [](const Simulation& s) { return s.scene().name; })
       .def_property_readonly("step_untried", [](const Simulation& s) { return s.runner().untried(); })
       .def_property_readonly("state_hash", [](const Simulation& s) { return stateHash(s.world()); })
-      .def_property_readonly("body_count", [](const Simulation& s) { return s.world().model().bodies.size(); })
-      .def("body_info",
-           [](const Simulation& s, long body) {
-             const BodyInfo& b = s.body(body);
-             py::dict d;
-             d["name"] = b.name;
-             d["first_vertex"] = b.firstVertex;
-             d["vertex_count"] = b.vertexCount;
-             d["mass"] = b.mass;
-             d["rest_volume"] = b.restVolume;
-             d["rest_size"] = b.restSize;
-             d["open"] = b.open;
-             return d;
-           })
+      .def_property_readonly("body_count", [](const Simulation& s) { return s.world().model().bodies.size(); });
+}
+
+// Simulation's bodies: their facts, their state as numpy views (and its setters), faces and measures.
+void defineSimulationBodies(py::class_<Simulation>& cls) {
+  cls.def("body_info",
+          [](const Simulation& s, long body) {
+            const BodyInfo& b = s.body(body);
+            py::dict d;
+            d["name"] = b.name;
+            d["first_vertex"] = b.firstVertex;
+            d["vertex_count"] = b.vertexCount;
+            d["mass"] = b.mass;
+            d["rest_volume"] = b.restVolume;
+            d["rest_size"] = b.restSize;
+            d["open"] = b.open;
+            return d;
+          })
       .def("positions", [](py::object self, long body) { return bodyRows(self, body, Rows::Positions); },
            py::arg("body") = -1)
       .def("velocities", [](py::object self, long body) { return bodyRows(self, body, Rows::Velocities); },
@@ -550,7 +556,18 @@ PYBIND11_MODULE(_springy, m) {
         d["contacts"] = touchingVertices(s.world(), static_cast<uint32_t>(body));
         return d;
       });
+}
 
+// The Simulation class (springy.load's result).
+void defineSimulation(py::module_& m) {
+  py::class_<Simulation> cls(m, "Simulation");
+  defineSimulationRuns(cls);
+  defineSimulationProperties(cls);
+  defineSimulationBodies(cls);
+}
+
+// The commands that draw or study: render_video, frames and study, as the command line runs them.
+void defineCommands(py::module_& m) {
   m.def(
       "render_video",
       [](const std::vector<std::string>& scenes, const std::string& output, const std::vector<std::string>& sets,
@@ -599,6 +616,10 @@ PYBIND11_MODULE(_springy, m) {
       },
       py::arg("kind"), py::arg("output"), py::arg("scenes"), py::arg("quick"), py::arg("repeats"),
       py::arg("max_duration"));
+}
+
+// The tables Python reads: the integrators' names and the run options.
+void defineTables(py::module_& m) {
   m.def("integrators", [] { return integratorNames(); });
   // The run options' table (run/options.h): what load() and the commands take, as the command line does.
   m.def("run_options", [] {
@@ -615,4 +636,16 @@ PYBIND11_MODULE(_springy, m) {
     }
     return rows;
   });
+}
+
+}  // namespace
+}  // namespace springy
+
+PYBIND11_MODULE(_springy, m) {
+  using namespace springy;
+  m.doc() = "springy's C++ core (use the springy package: docs/python.md)";
+  defineErrors(m);
+  defineSimulation(m);
+  defineCommands(m);
+  defineTables(m);
 }

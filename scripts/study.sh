@@ -3,9 +3,10 @@
 # the integrators' error against run time before and through contact, and their largest stable
 # steps on stiff and extreme cases.
 #   scripts/study.sh [BUILD_DIR]      (default: build; a Release build of the springy target)
-# Takes about 35 minutes on 2 cores (2026-12-04: the contact study 16.5 min and the stability study
-# 13 min, run side by side; the stability study alone 14 min; the accuracy study a few minutes).
-# Run on an otherwise idle machine: the wall times are measured.
+# Each study gives its independent runs to every core (study.h runInParallel), one after the
+# other: on 2 cores (2026-12-08) the accuracy study took 4.4 min (265 s) and the stability study
+# 8.5 min (508 s); before, one run at a time, about 15 and 14 min. The run times the pages report
+# are each run's thread CPU time, which its neighbour on the other core does not inflate.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${1:-build}"

@@ -7,16 +7,20 @@
 
 #include <pthread.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "run/load.h"
 #include "scene/scene.h"
 #include "sim/error.h"
 #include "mesh/mesh_io.h"
 #include "sim/model.h"
+#include "sim/world.h"
 
 namespace springy::fuzz {
 
@@ -60,6 +64,78 @@ inline bool worthBuilding(const SceneDesc& scene) {
 inline bool runScene(const std::string& text, const std::string& path) {
   try {
     const SceneDesc scene = parseScene(text, path);
+    if (worthBuilding(scene)) buildModel(scene);
+    return true;
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+// The motion target's input is a scene file's text, as the scene target's; the scene is then run
+// for a few steps, so that what moves on its own (motion tables of planes, [[triangles]] and
+// props, pin_motion and pin_release, [[attach]] springs and their release) is evaluated and
+// stepped, not only read. Stepping costs more than building, so the limits are lower; a scene
+// whose solver iterations alone would pass the fuzzer's time limit is only built.
+constexpr std::size_t kMaxStepVertices = 20000;
+constexpr int kMaxStepIterations = 200;
+constexpr int kMotionSteps = 24;
+
+inline bool worthStepping(const SceneDesc& scene) {
+  std::size_t vertices = 0;
+  for (const BodyDesc& b : scene.bodies) vertices += b.mesh.positions.size();
+  return worthBuilding(scene) && vertices <= kMaxStepVertices && scene.iterations <= kMaxStepIterations;
+}
+
+// parseScene, makeWorld (one thread) and kMotionSteps steps of the scene's step. Returns false
+// when an Error rejected the input (a refusal while stepping included). A state that goes
+// non-finite is the monitor's to catch (not here): only a crash or a sanitizer report is a bug.
+inline bool runSceneSteps(const std::string& text, const std::string& path) {
+  try {
+    const SceneDesc scene = parseScene(text, path);
+    if (!worthBuilding(scene)) return true;
+    if (!worthStepping(scene)) {
+      buildModel(scene);
+      return true;
+    }
+    RunOptions options;
+    options.threads = 1;
+    World world = makeWorld(scene, options);
+    for (int i = 0; i < kMotionSteps; ++i) world.step();
+    return true;
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+// The --set target's input: its first byte picks one of the repository's scenes (kSetScenes,
+// byte mod their count), the rest is lines, each one `--set KEY=VALUE` as the command line takes
+// it (loadSceneSetting, run/load.h), applied in order; the scene is then built as the scene
+// target builds it. Append only: reordering would change what every corpus entry means.
+constexpr std::string_view kSetScenes[] = {"single_sphere", "spheres", "press",  "cape",  "pile",
+                                           "bunny_light",   "jelly",   "shaker", "drape", "stack"};
+constexpr std::size_t kSetSceneCount = sizeof(kSetScenes) / sizeof(kSetScenes[0]);
+
+inline std::string setScenePath(const std::string& sourceDir, uint8_t selector) {
+  return sourceDir + "/scenes/" + std::string(kSetScenes[selector % kSetSceneCount]) + ".toml";
+}
+
+// The settings of a --set input: its lines after the first byte (empty lines kept: an empty
+// setting is an input too).
+inline std::vector<std::string> settingsOf(std::string_view text) {
+  std::vector<std::string> sets;
+  for (std::size_t start = 0; start <= text.size();) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    sets.emplace_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  return sets;
+}
+
+inline bool runSettings(const std::string& sourceDir, const uint8_t* data, std::size_t size) {
+  if (size == 0) return true;
+  try {
+    const SceneDesc scene = loadSceneSetting(setScenePath(sourceDir, data[0]),
+                                             settingsOf({reinterpret_cast<const char*>(data) + 1, size - 1}));
     if (worthBuilding(scene)) buildModel(scene);
     return true;
   } catch (const Error&) {

@@ -2,6 +2,9 @@
 """Regenerates the committed seed corpus fuzz/corpus/{scene,mesh} (fuzz/README.md).
 
 scene: the repository's scenes/*.toml and tests/data/**/*.toml.
+motion: the scenes among those where something moves on its own (a motion table, pin_motion,
+       pin_release, [[attach]]), and small ones (MOTION_SEEDS) that use every motion and attach key.
+set:   --set inputs (a byte choosing the scene, then one setting a line; fuzz/fuzz_inputs.h).
 mesh:  tests/data/meshes/*, a small sphere (icosphere, 162 vertices, 320 triangles) as ASCII and
        binary PLY, OFF, binary STL and OBJ, a tetrahedron as GLB, COLLADA and 3DS, and truncated
        cuts of some of them; each packed as a fuzz_mesh input (fuzz/mesh_input.py).
@@ -151,15 +154,125 @@ def write(path, data):
     return len(data)
 
 
+# Small scenes that use every motion and attachment key (scenes/README.md), for fuzz_motion.
+BALL = """[[body]]
+name = "{name}"
+shape = "icosphere"
+subdivisions = 1
+radius = 0.3
+position = {position}
+mass = 1.0
+"""
+MOTION_SEEDS = {
+    "attach_springs_to_moving_bar": """[scene]
+duration = 1.0
+dt = 0.002
+""" + BALL.format(name="ball", position="[0, 1, 0]") + """
+[[triangles]]
+name = "bar"
+quads = [[[-0.5, 1.5, -0.1], [-0.5, 1.5, 0.1], [0.5, 1.5, 0.1], [0.5, 1.5, -0.1]]]
+[triangles.motion]
+keys = [[0, 0, 0, 0], [0.02, 0.1, 0, 0], [0.04, 0.1, 0.1, 0]]
+interpolation = "cubic"
+
+[[attach]]
+body = "ball"
+points = [[0, 1.3, 0]]
+to = "bar"
+period = 0.5
+decay = 2.0
+release = 0.03
+""",
+    "attach_hard_and_two_bodies": """[scene]
+dt = 0.001
+""" + BALL.format(name="a", position="[0, 1, 0]") + BALL.format(name="b", position="[1, 1, 0]") + """
+[[triangles]]
+name = "hook"
+quads = [[[-0.2, 1.4, -0.2], [-0.2, 1.4, 0.2], [0.2, 1.4, 0.2], [0.2, 1.4, -0.2]]]
+[triangles.motion]
+spin = 90
+axis = [0, 1, 0]
+centre = [0, 0, 0]
+
+[[attach]]
+body = "a"
+points = [[0, 1.3, 0]]
+to = "hook"
+
+[[attach]]
+body = "b"
+points = [[0.7, 1, 0]]
+to = "a"
+period = 0.2
+release = 0.01
+""",
+    "cloth_pin_track": """[scene]
+dt = 0.001
+[[body]]
+name = "cloth"
+shape = "cloth"
+size = [0.5, 0.5]
+resolution = [4, 4]
+position = [0, 1, 0]
+mass = 0.1
+pin_side = "top"
+pin_release = 0.015
+[body.pin_motion]
+oscillate = [0.1, 0.0, 0.05]
+frequency = 20
+phase = 45
+""",
+    "oscillating_plane_and_prop": """[scene]
+dt = 0.002
+""" + BALL.format(name="ball", position="[0, 0.35, 0]") + """
+[[plane]]
+point = [0, 0, 0]
+normal = [0, 1, 0]
+[plane.motion]
+oscillate = [0, 0.05, 0]
+frequency = 10
+
+[[prop]]
+shape = "box"
+center = [0, 1, 0]
+size = [0.2, 0.2, 0.2]
+[prop.motion]
+keys = [[0, 0, 0, 0], [1, 0, 1, 0]]
+spin = 30
+""",
+}
+
+# --set seeds: the byte choosing the scene (fuzz/fuzz_inputs.h kSetScenes), then the settings.
+SET_SEEDS = {
+    "single_sphere_mass": (0, "body.mass=2.0\nscene.duration=0.5"),
+    "spheres_first_body": (1, "body.0.strut_period=0.02\nenvironment.drag=0.1"),
+    "press_motion_keys": (2, "triangles.0.motion.keys=[[0, 0, 0, 0], [1, 0, -0.5, 0]]"),
+    "cape_pin": (3, "body.pin_release=1.0\nbody.pin_motion.spin=90"),
+    "pile_integrator": (4, "scene.integrator=\"vbd\"\nscene.iterations=4"),
+    "bunny_new_table": (5, "render.camera.fov=40\nnew.table.key=1"),
+    "shaker_frequency": (7, "triangles.motion.frequency=5.0"),
+    "drape_array": (8, "body.0.color=[1, 0, 0]"),
+}
+
+MOVING_KEYS = ("motion", "pin_motion", "pin_release", "[[attach]]")
+
+
 def main():
     scene_dir, mesh_dir = FUZZ / "corpus" / "scene", FUZZ / "corpus" / "mesh"
-    for d in (scene_dir, mesh_dir):
+    motion_dir, set_dir = FUZZ / "corpus" / "motion", FUZZ / "corpus" / "set"
+    for d in (scene_dir, mesh_dir, motion_dir, set_dir):
         shutil.rmtree(d, ignore_errors=True)
         d.mkdir(parents=True)
     total = 0
     for src in sorted(ROOT.glob("scenes/*.toml")) + sorted(ROOT.glob("tests/data/**/*.toml")):
         name = "_".join(src.relative_to(ROOT).with_suffix("").parts)
         total += write(scene_dir / name, src.read_bytes())
+        if any(key in src.read_text() for key in MOVING_KEYS):
+            total += write(motion_dir / name, src.read_bytes())
+    for name, text in MOTION_SEEDS.items():
+        total += write(motion_dir / name, text.encode())
+    for name, (scene, settings) in SET_SEEDS.items():
+        total += write(set_dir / name, bytes([scene]) + settings.encode())
 
     def mesh(name, data, ext):
         nonlocal total
@@ -188,7 +301,7 @@ def main():
     mesh("cut_off", off(sv, sf)[:300], "off")
     mesh("cut_binary_stl", stl_binary(sv, sf)[:84 + 50 * 10 + 20], "stl")
     print(f"fuzz corpus: {len(list(scene_dir.iterdir()))} scenes, {len(list(mesh_dir.iterdir()))} meshes, "
-          f"{total} bytes")
+          f"{len(list(motion_dir.iterdir()))} moving scenes, {len(list(set_dir.iterdir()))} --set inputs, {total} bytes")
 
 
 if __name__ == "__main__":

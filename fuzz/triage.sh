@@ -3,7 +3,7 @@
 # sanitizer's or assert's message and the first frames of the stack) it prints the count, one
 # reproducer (the smallest) and its stack.
 #
-#   fuzz/triage.sh TARGET REPRODUCER...      TARGET: scene, mesh; needs build-fuzz (scripts/fuzz.sh)
+#   fuzz/triage.sh TARGET REPRODUCER...      TARGET: scene, mesh, motion, set; needs build-fuzz (scripts/fuzz.sh)
 #   fuzz/triage.sh mesh build-fuzz/runs/*/mesh/artifacts/*
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Fuzzes the scene parser and the mesh loader (fuzz/README.md).
+# Fuzzes the scene parser, the mesh loader, what moves on its own and --set (fuzz/README.md).
 #
-#   scripts/fuzz.sh [SECONDS] [TARGET...]      TARGET: scene, mesh (default: both); SECONDS: 60
+#   scripts/fuzz.sh [SECONDS] [TARGET...]      TARGET: scene, mesh, motion, set (default: all
+#                                              four); SECONDS: 60
 #
 # Builds the libFuzzer targets with clang under ASan + UBSan in build-fuzz/ (or
 # $SPRINGY_FUZZ_BUILD_DIR), then runs each target for SECONDS, one after the other, from the
@@ -16,12 +17,12 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 [ $# -gt 0 ] && shift
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scene mesh)
+[ ${#targets[@]} -gt 0 ] || targets=(scene mesh motion set)
 build_dir=${SPRINGY_FUZZ_BUILD_DIR:-build-fuzz}
 out=${SPRINGY_FUZZ_OUT:-$build_dir/runs/$(date +%Y%m%d-%H%M%S)}
 seed=${SPRINGY_FUZZ_SEED:-1}
 for t in "${targets[@]}"; do
-  case $t in scene | mesh) ;; *) echo "fuzz.sh: unknown target '$t' (scene, mesh)" >&2; exit 2 ;; esac
+  case $t in scene | mesh | motion | set) ;; *) echo "fuzz.sh: unknown target '$t' (scene, mesh, motion, set)" >&2; exit 2 ;; esac
 done
 
 # Asserts stay on (-O1 -g, no -DNDEBUG): a failed assert on fuzzed input is a bug too.
@@ -45,6 +46,8 @@ for t in "${targets[@]}"; do
   case $t in
     scene) extra=(-dict=fuzz/scene.dict -max_len=16384) ;;
     mesh) extra=(-dict=fuzz/mesh.dict -max_len=32768) ;;
+    motion) extra=(-dict=fuzz/motion.dict -max_len=8192) ;;
+    set) extra=(-dict=fuzz/set.dict -max_len=1024) ;;
   esac
   echo "== fuzz_$t: ${seconds} s, log $dir/fuzz.log =="
   # The first corpus directory receives new entries; fuzz/corpus/$t is only read.

@@ -2,9 +2,9 @@
 // few seconds otherwise (logs, CI).
 //
 // Time-based as well as count-based: a thread of its own prints the line again when nothing was
-// counted for a while (every second on a terminal, every 5 s in a log, the first time after 2 s), with the time spent on
-// the count in hand, so that a frame that takes minutes (vbd at 1000 sweeps a step, a tiny step)
-// still shows that springy is working, within a few seconds of its start.
+// counted for a while (every second on a terminal, every 5 s in a log, the first time after
+// 2 s), with the time spent on the count in hand, so that a frame that takes minutes (vbd at 1000
+// sweeps a step, a tiny step) still shows within seconds that springy is working.
 #pragma once
 
 #include <chrono>

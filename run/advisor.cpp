@@ -174,6 +174,16 @@ std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char
   }
   return said;
 }
+// The survey of the whole run for --substeps auto (sim/stability.h surveyStability), saying every
+// 5 s that it goes on. Throws springy::Error when interrupted.
+StabilitySurvey surveyTheRun(const std::string& path, const Model& model, const SceneDesc& scene, unsigned threads,
+                             std::ostream& log) {
+  const StillWorking working(log, "springy: " + path + ": surveying");
+  StabilitySurvey survey = surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps,
+                                           scene.dt, scene.tolerance, threads);
+  if (interrupted()) throw Error(path + ": --substeps auto: the survey: interrupted");
+  return survey;
+}
 }  // namespace
 
 std::string substepsText(int count) { return std::to_string(count) + (count == 1 ? " substep" : " substeps"); }
@@ -211,12 +221,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     log << "springy: " << path << ": surveying the run for --substeps auto (" << integratorName(kDefaultAdaptive)
         << "; the stiffest mode found every frame and wherever the shape stiffens)...\n"
         << std::flush;
-    const StabilitySurvey survey = [&] {
-      const StillWorking working(log, "springy: " + path + ": surveying");
-      return surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps, scene.dt,
-                             scene.tolerance, threads);
-    }();
-    if (interrupted()) throw Error(path + ": --substeps auto: the survey: interrupted");
+    const StabilitySurvey survey = surveyTheRun(path, model, scene, threads, log);
     if (!survey.failure.empty()) {
       throw Error(path + ": --substeps auto: the survey run (" + std::string(integratorName(kDefaultAdaptive)) +
                   ", tolerance " + number(scene.tolerance) + ") failed, so no step can be advised: " +

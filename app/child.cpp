@@ -1,7 +1,8 @@
 #include "app/child.h"
 
+#include <fcntl.h>
 #include <poll.h>
-#include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -59,19 +60,61 @@ std::string findProgram(const std::string& name) {
   return {};
 }
 
-int runChild(const std::string& exe, const std::vector<std::string>& args, const std::string& directory) {
+pid_t startChild(const std::string& exe, const std::vector<std::string>& args, const std::string& directory,
+                 int output) {
   std::vector<std::string> all = {exe};
   all.insert(all.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (std::string& a : all) argv.push_back(a.data());
   argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  if (!directory.empty()) posix_spawn_file_actions_addchdir_np(&actions, directory.c_str());
-  pid_t pid = 0;
-  const int error = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (error != 0) throw Error("cannot start " + exe + ": " + errorText(error));
+  // The child's errno when it cannot start comes back through a pipe that execve closes.
+  int report[2] = {-1, -1};
+  if (::pipe2(report, O_CLOEXEC) != 0) throw Error("cannot start " + exe + ": " + errorText(errno));
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // Only async-signal-safe calls from here to execve: this process may have other threads.
+    // PR_SET_PDEATHSIG: SIGTERM when springy ends (its interrupt handler cleans up); springy may
+    // have ended before the call, so the parent is checked after it (then it was reparented).
+    if (::prctl(PR_SET_PDEATHSIG, SIGTERM) != 0 || ::getppid() != parent) ::_exit(127);
+    sigset_t none;
+    sigemptyset(&none);
+    ::sigprocmask(SIG_SETMASK, &none, nullptr);
+    int error = 0;
+    if (output >= 0 && (::dup2(output, STDOUT_FILENO) < 0 || ::dup2(output, STDERR_FILENO) < 0)) error = errno;
+    if (error == 0 && !directory.empty() && ::chdir(directory.c_str()) != 0) error = errno;
+    if (error == 0) {
+      ::execve(exe.c_str(), argv.data(), environ);
+      error = errno;
+    }
+    const ssize_t written = ::write(report[1], &error, sizeof error);
+    (void)written;
+    ::_exit(127);
+  }
+  const int forkError = errno;
+  ::close(report[1]);
+  if (pid < 0) {
+    ::close(report[0]);
+    throw Error("cannot start " + exe + ": " + errorText(forkError));
+  }
+  int error = 0;
+  ssize_t n = 0;
+  do {
+    n = ::read(report[0], &error, sizeof error);
+  } while (n < 0 && errno == EINTR);
+  ::close(report[0]);
+  if (n == static_cast<ssize_t>(sizeof error)) {
+    ::waitpid(pid, nullptr, 0);
+    throw Error("cannot start " + exe + (directory.empty() ? "" : " in " + directory) + ": " + errorText(error));
+  }
+  return pid;
+}
+
+namespace {
+
+// Waits for the child `pid` to end, passing an interrupt of this process on to it once; returns
+// its exit status (128 + the signal's number if a signal ended it).
+int awaitChild(pid_t pid, const std::string& exe) {
   bool passedOn = false;
   for (;;) {
     int status = 0;
@@ -87,6 +130,46 @@ int runChild(const std::string& exe, const std::vector<std::string>& args, const
     }
     waitForAChild({pid});
   }
+}
+
+}  // namespace
+
+int runChild(const std::string& exe, const std::vector<std::string>& args, const std::string& directory) {
+  return awaitChild(startChild(exe, args, directory), exe);
+}
+
+ChildOutput runCapturing(const std::string& exe, const std::vector<std::string>& args, const std::string& directory) {
+  int pipe[2] = {-1, -1};
+  if (::pipe2(pipe, O_CLOEXEC) != 0) throw Error("cannot start " + exe + ": " + errorText(errno));
+  pid_t pid = -1;
+  try {
+    pid = startChild(exe, args, directory, pipe[1]);
+  } catch (...) {
+    ::close(pipe[0]);
+    ::close(pipe[1]);
+    throw;
+  }
+  ::close(pipe[1]);
+  // Read to the end (the child's exit, or its streams closed), waking every 200 ms to pass an
+  // interrupt on: the child then ends, and so does its output.
+  ChildOutput result;
+  bool passedOn = false;
+  for (;;) {
+    pollfd p{pipe[0], POLLIN, 0};
+    if (::poll(&p, 1, 200) > 0) {
+      char buffer[4096];
+      const ssize_t n = ::read(pipe[0], buffer, sizeof buffer);
+      if (n == 0 || (n < 0 && errno != EINTR && errno != EAGAIN)) break;
+      if (n > 0) result.output.append(buffer, static_cast<std::size_t>(n));
+    }
+    if (interrupted() && !passedOn) {
+      ::kill(pid, interruptSignal());
+      passedOn = true;
+    }
+  }
+  ::close(pipe[0]);
+  result.status = awaitChild(pid, exe);
+  return result;
 }
 
 }  // namespace springy

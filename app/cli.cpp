@@ -325,7 +325,9 @@ int runMain(int argc, char** argv) {
     return cli.dispatch();
   } catch (const Error& e) {
     std::cerr << "springy: " << e.what() << "\n";
-    return 1;
+    // Work that stopped for an interrupt (a survey, suggest's simulations, a study) ends as the
+    // signal's: 130 for Ctrl-C, 143 for SIGTERM.
+    return interrupted() ? interruptedExitStatus() : 1;
   } catch (const std::bad_alloc&) {
     std::cerr << "springy: out of memory (the scene or its meshes are too large for this machine)\n";
     return 1;

@@ -18,7 +18,9 @@ void runGnuplot(const std::filesystem::path& script) {
 
 std::string gnuplotText(const std::string& text) {
   std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("''") : std::string(1, c);
+  // A line break would end the string and start a command (gnuplot's `system` runs a shell):
+  // a body or scene named "x\nsystem('...')" is written with spaces instead.
+  for (char c : text) out += c == '\'' ? std::string("''") : c == '\n' || c == '\r' ? std::string(" ") : std::string(1, c);
   return out + "'";
 }
 

@@ -14,7 +14,7 @@ bool haveGnuplot();
 // springy::Error when gnuplot is missing or fails.
 void runGnuplot(const std::filesystem::path& script);
 
-// `text` as a gnuplot string literal: in single quotes, a quote doubled.
+// `text` as a gnuplot string literal: in single quotes, a quote doubled, a line break a space.
 std::string gnuplotText(const std::string& text);
 
 }  // namespace springy

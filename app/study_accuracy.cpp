@@ -10,6 +10,7 @@
 #include "sim/cases.h"
 #include "sim/diagnostics.h"
 #include "sim/error.h"
+#include "sim/interrupt.h"
 #include "sim/parallel.h"
 #include "sim/shapes.h"
 
@@ -42,7 +43,8 @@ std::vector<Vec3> runTo(const Model& model, const std::vector<Vec3>& x0, Integra
   World world(model, integrator, dt);
   world.setState(x0, world.velocities());
   const auto steps = static_cast<long>(std::llround(end / dt));
-  for (long s = 0; s < steps; ++s) world.step();
+  // Stops at an interrupt (the study then throws): the interrupt flag is one atomic load a step.
+  for (long s = 0; s < steps && !interrupted(); ++s) world.step();
   if (seconds) *seconds = threadCpuSeconds() - start;
   return world.positions();
 }

@@ -129,6 +129,7 @@ void runInParallel(const std::string& label, const std::vector<double>& cost,
         if (!error) error = std::current_exception();
         return;
       }
+      if (interrupted()) return;  // the job stopped short: not a run done
       const std::lock_guard<std::mutex> lock(mutex);
       progress.update(static_cast<long>(++done), std::to_string(workers) + " at a time");
     }

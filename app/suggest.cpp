@@ -14,6 +14,7 @@
 #include "sim/diagnostics.h"
 #include "sim/error.h"
 #include "sim/harness.h"
+#include "sim/interrupt.h"
 #include "sim/limits.h"
 #include "sim/parallel.h"
 #include "sim/stability.h"
@@ -66,7 +67,15 @@ double squashHorizon(const SceneDesc& scene) {
   return std::min(scene.duration, latest >= 0.0 ? latest + 0.6 : 2.0);
 }
 
-std::vector<Squash> simulateSquash(const SceneDesc& scene, double horizon) {
+// Stops suggest's simulations when interrupted (sim/interrupt.h): springy exits with 128 + the
+// signal's number.
+void stopIfInterrupted() {
+  if (interrupted()) throw Error("suggest: interrupted");
+}
+
+// `stopAtBlowUp`: stop at the first body that blows up (the others keep what was measured before);
+// otherwise that body is marked and the others are measured on.
+std::vector<Squash> simulateSquash(const SceneDesc& scene, double horizon, bool stopAtBlowUp) {
   Model model = buildModel(scene);
   const StabilityReport r = estimateStability(model, model.restPosition, scene.integrator, horizon);
   const int substeps = std::isfinite(r.dtMax) ? safeSubsteps(scene.dt, r.dtMax, kImpactMargin) : scene.substeps;
@@ -87,16 +96,21 @@ std::vector<Squash> simulateSquash(const SceneDesc& scene, double horizon) {
   for (std::size_t b = 0; b < bodies; ++b) restExtent[b] = extent(world, world.model().bodies[b]);
   const double every = 1.0 / 240.0;  // measured this often
   double next = every;
-  while (world.time() < horizon) {
+  std::size_t blownUp = 0;
+  while (world.time() < horizon && blownUp < bodies) {
+    stopIfInterrupted();  // every step
     world.step();
     if (world.time() < next) continue;
     next += every;
     for (std::size_t b = 0; b < bodies; ++b) {
+      if (!out[b].finite) continue;
       const BodyInfo& info = world.model().bodies[b];
       const BodyMeasures m = measureBody(world, static_cast<uint32_t>(b));
       if (!m.finite) {
         out[b].finite = false;
-        return out;
+        if (stopAtBlowUp) return out;
+        ++blownUp;
+        continue;
       }
       if (info.restVolume > 0.0) out[b].lowestVolume = std::min(out[b].lowestVolume, m.volume / info.restVolume);
       out[b].flattening = std::max(out[b].flattening, 1.0 - extent(world, info) / restExtent[b]);
@@ -119,12 +133,49 @@ void scalePeriods(BodyDesc& desc, const BodyInfo& info, double f) {
   if (desc.hingeStiffness) *desc.hingeStiffness /= f * f;
 }
 
+// The softest factor f of its periods in [0.1, 1] (in log, five halvings) that keeps each body of
+// `soft` above `keepVolume` through the first impact, or 0 where a tenth does not keep it. The
+// bodies are searched together: each trial scales every body still searched by its own factor
+// and simulates the scene once, so the search costs six simulations whatever the number of bodies
+// (body by body it cost six per body, each of the whole scene: 50 soft balls took 500 s).
+std::vector<double> keepingFactors(const SceneDesc& scene, const Model& model, const std::vector<uint32_t>& soft,
+                                   double horizon, double keepVolume) {
+  const std::size_t n = soft.size();
+  const auto keeps = [&](const std::vector<double>& f) {
+    SceneDesc trial = scene;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (f[i] != 1.0) scalePeriods(trial.bodies[soft[i]], model.bodies[soft[i]], f[i]);
+    }
+    const std::vector<Squash> t = simulateSquash(trial, horizon, false);
+    std::vector<bool> kept(n);
+    for (std::size_t i = 0; i < n; ++i) kept[i] = t[soft[i]].finite && t[soft[i]].lowestVolume >= keepVolume;
+    return kept;
+  };
+  std::vector<double> lo(n, 0.1), hi(n, 1.0), mid(n);
+  if (n == 0) return lo;
+  const std::vector<bool> atTenth = keeps(lo);
+  for (int halving = 0; halving < 5; ++halving) {
+    // A body that a tenth does not keep stays as it is while the others are searched.
+    for (std::size_t i = 0; i < n; ++i) mid[i] = atTenth[i] ? std::sqrt(lo[i] * hi[i]) : 1.0;
+    const std::vector<bool> kept = keeps(mid);
+    for (std::size_t i = 0; i < n; ++i) (kept[i] ? lo[i] : hi[i]) = mid[i];
+  }
+  for (std::size_t i = 0; i < n; ++i) lo[i] = atTenth[i] ? lo[i] : 0.0;
+  return lo;
+}
+
 void printSquash(const SceneDesc& scene, const Model& model, double keepVolume) {
   const double horizon = squashHorizon(scene);
-  const std::vector<Squash> now = simulateSquash(scene, horizon);
+  const std::vector<Squash> now = simulateSquash(scene, horizon, true);
+  // The bodies to search: those below keepVolume, up to the first that blew up (where it stops).
+  std::vector<uint32_t> soft;
+  for (uint32_t b = 0; b < model.bodies.size() && now[b].finite; ++b) {
+    if (model.bodies[b].restVolume > 0.0 && now[b].lowestVolume < keepVolume) soft.push_back(b);
+  }
+  const std::vector<double> factors = keepingFactors(scene, model, soft, horizon, keepVolume);
   std::printf("  shape through the first impact (simulated to %.3g s at the default step; --keep-volume %g):\n", horizon,
               keepVolume);
-  for (uint32_t b = 0; b < model.bodies.size(); ++b) {
+  for (uint32_t b = 0, searched = 0; b < model.bodies.size(); ++b) {
     const BodyInfo& info = model.bodies[b];
     const Squash& s = now[b];
     if (!s.finite) {
@@ -142,32 +193,21 @@ void printSquash(const SceneDesc& scene, const Model& model, double keepVolume) 
       std::printf(": holds its shape\n");
       continue;
     }
-    // Bisect the period factor f in [0.1, 1] (in log): the softest values that keep the volume.
-    auto keeps = [&](double f) {
-      SceneDesc trial = scene;
-      scalePeriods(trial.bodies[b], info, f);
-      const std::vector<Squash> t = simulateSquash(trial, horizon);
-      return t[b].finite && t[b].lowestVolume >= keepVolume;
-    };
-    double lo = 0.1, hi = 1.0;
-    if (!keeps(lo)) {
+    const double f = factors[searched++];
+    if (f == 0.0) {
       std::printf(": below %.0f%%, and periods a tenth as long do not keep it either (a gas, volume_period, "
                   "holds a volume at any softness)\n",
                   100 * keepVolume);
       continue;
     }
-    for (int i = 0; i < 5; ++i) {
-      const double mid = std::sqrt(lo * hi);
-      (keeps(mid) ? lo : hi) = mid;
-    }
     BodyDesc stiffer = scene.bodies[b];
-    scalePeriods(stiffer, info, lo);
+    scalePeriods(stiffer, info, f);
     if (stiffer.material == MaterialModel::Body) {
       std::printf(": to keep %.0f%%: stretch_period = %.3g, bend_period = %.3g (x %.2f)\n", 100 * keepVolume,
-                  *stiffer.stretchPeriod, *stiffer.bendPeriod, lo);
+                  *stiffer.stretchPeriod, *stiffer.bendPeriod, f);
     } else {
       std::printf(": to keep %.0f%%: its periods x %.2f (strut_period = %.3g, hinge_period = %.3g)\n",
-                  100 * keepVolume, lo, stiffer.strutPeriod, stiffer.hingePeriod);
+                  100 * keepVolume, f, stiffer.strutPeriod, stiffer.hingePeriod);
     }
   }
 }
@@ -350,7 +390,10 @@ int runSuggest(const SuggestOptions& options) {
     std::printf("%s: %s, integrator %s, dt %g s, %s (step %g s), horizon %g s\n", path.c_str(), scene.name.c_str(),
                 std::string(integratorName(scene.integrator)).c_str(), scene.dt, substepsText(scene.substeps).c_str(),
                 h, scene.duration);
-    for (uint32_t bi = 0; bi < model.bodies.size(); ++bi) adviseBody(scene, model, bi, h);
+    for (uint32_t bi = 0; bi < model.bodies.size(); ++bi) {
+      stopIfInterrupted();
+      adviseBody(scene, model, bi, h);
+    }
     printSquash(scene, model, options.keepVolume);
   }
   return failures == 0 ? 0 : 1;

@@ -6,7 +6,6 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <sched.h>
-#include <spawn.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -427,20 +426,18 @@ std::string describe(const SweepTask& t) {
 
 pid_t spawnTask(const std::string& exe, const SweepTask& task, unsigned threads) {
   makeDirectories(fs::path(task.log).parent_path().string(), "logs");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, task.log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0666);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-  std::vector<std::string> args = {exe, "run-task", "manifest.jsonl", "--index", std::to_string(task.index)};
+  const int log = ::open(task.log.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0666);
+  if (log < 0) throw Error("cannot open the task's log '" + task.log + "': " + errorText(errno));
+  std::vector<std::string> args = {"run-task", "manifest.jsonl", "--index", std::to_string(task.index)};
   if (threads > 0) args.insert(args.end(), {"--threads", std::to_string(threads)});
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  const int error = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  if (error != 0) throw Error("cannot start " + exe + " run-task: " + errorText(error));
-  return pid;
+  try {
+    const pid_t pid = startChild(exe, args, "", log);
+    ::close(log);
+    return pid;
+  } catch (...) {
+    ::close(log);
+    throw;
+  }
 }
 
 // A task's run-task child: its task, the threads it holds and when it started.
@@ -589,28 +586,22 @@ int runLocally(const std::vector<SweepTask>& tasks, unsigned jobs) {
   return runner.run();
 }
 
-// `text` quoted for sh.
+// `text` quoted for sh (the job scripts' exec line): any bytes, a newline included.
 std::string shellQuoted(const std::string& text) {
   std::string out = "'";
   for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return out + "'";
 }
 
-// Runs a command through sh; returns its standard output. Throws springy::Error with the output
-// when it fails.
-std::string runCapturing(const std::string& command) {
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) throw Error("cannot run '" + command + "': " + errorText(errno));
-  std::string output;
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  const int status = pclose(pipe);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    throw Error("'" + command + "' failed (exit " + std::to_string(code) + ")" +
-                (code == 127 ? ": is Slurm's client installed (Debian: slurm-client)?" : "") + "\n" + output);
-  }
-  return output;
+// Runs sbatch with `args` in `directory` (no shell); returns what it printed. Throws
+// springy::Error with its output when it fails.
+std::string runSbatch(const std::vector<std::string>& args, const std::string& directory) {
+  const std::string sbatch = findProgram("sbatch");
+  if (sbatch.empty()) throw Error("sbatch is not on PATH: is Slurm's client installed (Debian: slurm-client)?");
+  const ChildOutput r = runCapturing(sbatch, args, directory);
+  if (interrupted()) throw Error("sbatch: interrupted");
+  if (r.status != 0) throw Error("sbatch " + args.back() + " failed (exit " + std::to_string(r.status) + ")\n" + r.output);
+  return r.output;
 }
 
 // The job id of `sbatch --parsable`'s "ID" or "ID;CLUSTER".
@@ -623,12 +614,13 @@ std::string jobId(const std::string& output, const std::string& command) {
 }
 
 int submitToSlurm(const SweepOptions& options, const std::vector<SweepTask>& tasks, const std::string& directory) {
+  // No name in the scripts but springy's own path, quoted: sbatch runs in the sweep's folder (this
+  // process's working directory), which the jobs then start in, so the logs and the manifest are
+  // named relative to it, and the user's sbatch arguments go on its command line. A folder named
+  // "a\n#SBATCH ..." or "x; rm -rf ~" is only ever a working directory.
   const std::string exe = shellQuoted(selfExecutable());
-  const std::string dir = shellQuoted(directory);
   makeDirectories("slurm", "slurm");
   makeDirectories("logs", "logs");
-  std::string common = "#SBATCH --chdir=" + directory + "\n";
-  for (const std::string& a : options.sbatchArgs) common += "#SBATCH " + a + "\n";
   const unsigned k = options.maxRunning ? options.maxRunning : static_cast<unsigned>(tasks.size());
   // Slurm's filename patterns: %a the array index, %4a zero-padded to four digits (sbatch(1)), so
   // a task's log is logs/NNNN.log as with the local runner. run-task reads the index from
@@ -636,19 +628,22 @@ int submitToSlurm(const SweepOptions& options, const std::vector<SweepTask>& tas
   writeFileAtomically("slurm/array.sh", "#!/bin/sh\n#SBATCH --job-name=springy-sweep\n#SBATCH --array=0-" +
                                             std::to_string(tasks.size() - 1) + "%" + std::to_string(k) +
                                             "\n#SBATCH --cpus-per-task=" + std::to_string(options.cpusPerTask) +
-                                            "\n#SBATCH --ntasks=1\n#SBATCH --output=" + directory + "/logs/%4a.log\n" +
-                                            common + "exec " + exe + " run-task " + dir + "/manifest.jsonl\n");
+                                            "\n#SBATCH --ntasks=1\n#SBATCH --output=logs/%4a.log\nexec " + exe +
+                                            " run-task manifest.jsonl\n");
   writeFileAtomically("slurm/gather.sh",
                       "#!/bin/sh\n#SBATCH --job-name=springy-gather\n#SBATCH --ntasks=1\n"
-                      "#SBATCH --output=" +
-                          directory + "/logs/gather.log\n" + common + "exec " + exe + " gather " + dir +
-                          "/manifest.jsonl\n");
-  const std::string submitArray = "sbatch --parsable " + dir + "/slurm/array.sh";
-  const std::string array = jobId(runCapturing(submitArray), submitArray);
+                      "#SBATCH --output=logs/gather.log\nexec " +
+                          exe + " gather manifest.jsonl\n");
+  std::vector<std::string> submit = {"--parsable"};
+  submit.insert(submit.end(), options.sbatchArgs.begin(), options.sbatchArgs.end());
+  std::vector<std::string> submitArray = submit;
+  submitArray.push_back("slurm/array.sh");
+  const std::string array = jobId(runSbatch(submitArray, ""), "sbatch slurm/array.sh");
   // afterok: the gather starts when every task of the array has ended with exit status 0 (a task
   // whose check failed still ends so: its result holds the failure).
-  const std::string submitGather = "sbatch --parsable --dependency=afterok:" + array + " " + dir + "/slurm/gather.sh";
-  const std::string gather = jobId(runCapturing(submitGather), submitGather);
+  std::vector<std::string> submitGather = submit;
+  submitGather.insert(submitGather.end(), {"--dependency=afterok:" + array, "slurm/gather.sh"});
+  const std::string gather = jobId(runSbatch(submitGather, ""), "sbatch slurm/gather.sh");
   writeFileAtomically("slurm/jobs", "array " + array + "\ngather " + gather + "\n");
   std::printf(
       "sweep: submitted job array %s (%zu tasks, at most %u at once, %u cpus each) and gather job %s (after "

@@ -1,9 +1,14 @@
 #include "run/advisor.h"
 
 #include <cctype>
+#include <chrono>
+#include <condition_variable>
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <ostream>
+#include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -19,6 +24,42 @@ namespace springy {
 namespace {
 
 constexpr double kSafety = 0.9;  // aim below the estimated limit
+
+// Says on `log` every 5 s that `what` goes on: a survey or a try of a large scene takes minutes,
+// and a log should show within seconds that springy is working. From a thread of its own, while
+// the caller writes nothing to `log`; stops when it goes.
+class StillWorking {
+ public:
+  StillWorking(std::ostream& log, std::string what)
+      : log_(log), what_(std::move(what)), start_(std::chrono::steady_clock::now()), thread_([this] { run(); }) {}
+  ~StillWorking() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  StillWorking(const StillWorking&) = delete;
+  StillWorking& operator=(const StillWorking&) = delete;
+
+ private:
+  void run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (int k = 1; !wake_.wait_for(lock, start_ + std::chrono::seconds(5 * k) - std::chrono::steady_clock::now(),
+                                    [this] { return done_; });
+         ++k) {
+      log_ << what_ << ": " << 5 * k << " s so far\n" << std::flush;
+    }
+  }
+  std::ostream& log_;
+  std::string what_;
+  std::chrono::steady_clock::time_point start_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool done_ = false;
+  std::thread thread_;  // last: started once the rest is set
+};
 
 std::string seconds(double s) {
   char buf[32];
@@ -89,7 +130,10 @@ std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char
     s.threads = threads;
     // The model as the run builds it: its resting speed for contacts follows the step.
     const Model model = buildModel(scene);
-    const RunPath r = tracePath(model, s);
+    const RunPath r = [&] {
+      const StillWorking working(log, "springy: " + path + ": trying " + substepsText(substeps));
+      return tracePath(model, s);
+    }();
     if (interrupted()) throw Error(path + ": " + what + ": interrupted");
     char at[64];
     std::snprintf(at, sizeof at, "after t = %.3g s", r.times.empty() ? 0.0 : r.times.back());
@@ -130,6 +174,16 @@ std::string tryTheSubsteps(const std::string& path, SceneDesc& scene, const char
   }
   return said;
 }
+// The survey of the whole run for --substeps auto (sim/stability.h surveyStability), saying every
+// 5 s that it goes on. Throws springy::Error when interrupted.
+StabilitySurvey surveyTheRun(const std::string& path, const Model& model, const SceneDesc& scene, unsigned threads,
+                             std::ostream& log) {
+  const StillWorking working(log, "springy: " + path + ": surveying");
+  StabilitySurvey survey = surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps,
+                                           scene.dt, scene.tolerance, threads);
+  if (interrupted()) throw Error(path + ": --substeps auto: the survey: interrupted");
+  return survey;
+}
 }  // namespace
 
 std::string substepsText(int count) { return std::to_string(count) + (count == 1 ? " substep" : " substeps"); }
@@ -167,8 +221,7 @@ void adviseTimeStep(const std::string& path, SceneDesc& scene, StepChoice choice
     log << "springy: " << path << ": surveying the run for --substeps auto (" << integratorName(kDefaultAdaptive)
         << "; the stiffest mode found every frame and wherever the shape stiffens)...\n"
         << std::flush;
-    const StabilitySurvey survey = surveyStability(model, scene.integrator, scene.duration, 1.0 / scene.view.render.fps,
-                                                   scene.dt, scene.tolerance, threads);
+    const StabilitySurvey survey = surveyTheRun(path, model, scene, threads, log);
     if (!survey.failure.empty()) {
       throw Error(path + ": --substeps auto: the survey run (" + std::string(integratorName(kDefaultAdaptive)) +
                   ", tolerance " + number(scene.tolerance) + ") failed, so no step can be advised: " +

@@ -80,6 +80,7 @@ class Springy {
   }
 
   void signal(int s) const { ::kill(pid_, s); }
+  pid_t pid() const { return pid_; }
 
   // Waits at most `timeout` (then kills it: a hang is a failure).
   Result wait(double timeout = 60.0) {

@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +16,7 @@
 #include <optional>
 #include <sstream>
 #include <system_error>
+#include <vector>
 
 #include "app/atomic_file.h"
 #include "sim/error.h"
@@ -27,7 +30,7 @@ namespace fs = std::filesystem;
 struct Entry {
   enum class Kind { File, Folder, Other } kind = Kind::Other;
   std::uintmax_t size = 0;  // a file's bytes
-  long long mtime = 0;      // a file's modification time [ns]
+  std::uint64_t hash = 0;   // of a file's bytes (contentHash): a change of the same size shows too
   bool operator==(const Entry&) const = default;
 };
 using Listing = std::map<std::string, Entry>;  // by the path inside the folder
@@ -36,6 +39,30 @@ using Listing = std::map<std::string, Entry>;  // by the path inside the folder
 constexpr const char* kListHeader =
     "# What springy wrote here. Anything else (or a file changed since) is kept: springy will not replace\n"
     "# the folder while it holds one.\n";
+
+// A hash of the file's bytes (FNV-1a over 8-byte words, then the tail), 0 when it cannot be read.
+// Its bytes, not its time: a folder copied elsewhere keeps its list, and the same run writes the
+// same marker.
+std::uint64_t contentHash(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return 0;
+  std::vector<unsigned char> buffer(1 << 20);
+  std::uint64_t h = 14695981039346656037ULL;
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    std::size_t k = 0;
+    for (; k + 8 <= static_cast<std::size_t>(n); k += 8) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, buffer.data() + k, 8);
+      h = (h ^ word) * 1099511628211ULL;
+    }
+    for (; k < static_cast<std::size_t>(n); ++k) h = (h ^ buffer[k]) * 1099511628211ULL;
+  }
+  ::close(fd);
+  return h;
+}
 
 // Everything under `root` but its marker, symbolic links not followed. Throws springy::Error.
 Listing listFolder(const std::string& root, const std::string& marker, const std::string& what) {
@@ -52,7 +79,7 @@ Listing listFolder(const std::string& root, const std::string& marker, const std
     if (!S_ISREG(st.st_mode)) continue;
     e.kind = Entry::Kind::File;
     e.size = static_cast<std::uintmax_t>(st.st_size);
-    e.mtime = static_cast<long long>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
+    e.hash = contentHash(it->path().string());
   }
   if (error) throw Error(what + ": cannot list the folder " + root + ": " + error.message());
   return out;
@@ -63,7 +90,7 @@ std::string listingText(const Listing& listing) {
   for (const auto& [path, e] : listing) {
     if (e.kind == Entry::Kind::Folder) text += "folder " + path + "\n";
     if (e.kind == Entry::Kind::File) {
-      text += "file " + std::to_string(e.size) + " " + std::to_string(e.mtime) + " " + path + "\n";
+      text += "file " + std::to_string(e.size) + " " + std::to_string(e.hash) + " " + path + "\n";
     }
   }
   return text;
@@ -89,7 +116,7 @@ std::optional<Listing> readListing(const std::string& markerPath) {
       e.kind = Entry::Kind::Folder;
     } else if (kind == "file") {
       e.kind = Entry::Kind::File;
-      words >> e.size >> e.mtime;
+      words >> e.size >> e.hash;
     } else {
       continue;
     }
@@ -171,15 +198,7 @@ OutputFolder::OutputFolder(std::string target, std::string marker, const std::st
                     ", which the run reads, and springy replaces the whole folder; pick another folder");
       }
     }
-    if (::access((target_ + "/" + marker_).c_str(), F_OK) != 0) {
-      if (!std::filesystem::is_empty(target_, error) || error) {
-        throw Error(what_ + ": " + target_ +
-                    " exists, is not empty and was not written by springy (it holds no " + marker_ +
-                    "); pick another folder or empty it");
-      }
-    } else {
-      refuseForeign();
-    }
+    refuseForeign();
   }
   const fs::path t(target_);
   const fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");
@@ -204,6 +223,12 @@ OutputFolder::~OutputFolder() {
 }
 
 void OutputFolder::refuseForeign() const {
+  if (::access((target_ + "/" + marker_).c_str(), F_OK) != 0) {
+    std::error_code error;
+    if (std::filesystem::is_empty(target_, error) && !error) return;  // an empty folder is taken
+    throw Error(what_ + ": " + target_ + " exists, is not empty and was not written by springy (it holds no " +
+                marker_ + "); pick another folder or empty it");
+  }
   const std::vector<std::string> foreign = foreignEntries(target_, marker_, what_);
   if (foreign.empty()) return;
   throw Error(what_ + ": " + target_ + " holds " + std::to_string(foreign.size()) +

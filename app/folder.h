@@ -1,12 +1,12 @@
 // springy app: output folders that appear complete or not at all (the VTK series' frames, a
 // report). A folder is built under a hidden temporary name beside its target and renamed into
-// place when complete. Its marker file lists what springy wrote there (each file with its size and
-// time): an earlier folder of springy's is replaced only while it holds nothing else, so a file
-// the user added to it (or changed) is never lost: the command refuses before it runs, naming
-// those files. A folder that springy did not make is never touched. Like AtomicFile, every
-// failure is a springy::Error naming the folder and the reason; nothing is left behind by a
-// failure or a signal (the temporary folder is removed by its destructor, or by the signal's
-// handler: registerTemporary).
+// place when complete. Its marker file lists what springy wrote there (each file with its size
+// and a hash of its bytes): an earlier folder of springy's is replaced only while it holds
+// nothing else, so a file the user added to it (or changed) is never lost: the command refuses
+// before it runs, naming those files. A folder that springy did not make is never touched. Like
+// AtomicFile, every failure is a springy::Error naming the folder and the reason; nothing is
+// left behind by a failure or a signal (the temporary folder is removed by its destructor, or
+// by the signal's handler: registerTemporary).
 #pragma once
 
 #include <string>
@@ -40,6 +40,7 @@ class OutputFolder {
 
  private:
   [[noreturn]] void fail(const std::string& what, int error) const;
+  // Throws unless the existing target is empty or holds only what its marker lists.
   void refuseForeign() const;
   std::string target_, marker_, markerText_, what_, temporary_;
   int registered_ = -1;  // registerTemporary's handle

@@ -1,11 +1,15 @@
 #include "app/atomic_file.h"
 
+#include <atomic>
 #include <cerrno>
+#include <climits>
+#include <iterator>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 #include "sim/error.h"
@@ -14,6 +18,65 @@ namespace springy {
 namespace {
 
 void onSignal(int signal) { requestInterrupt(signal); }  // the first signal decides the exit status
+
+// The temporaries that exist now, for a signal handler to remove: a fixed table (a handler may
+// not allocate), each slot written whole before it is marked live. `owner` keeps a forked child
+// (the mesh reader's, which ends by SIGALRM on a hang) from removing its parent's files.
+struct TemporarySlot {
+  std::atomic<int> state{0};  // 0 free, 1 being filled, 2 live
+  pid_t owner = 0;
+  bool folder = false;
+  char path[PATH_MAX] = {};
+};
+TemporarySlot temporaries[64];
+
+// Removes `name` under the directory `parent` and, for a folder, everything in it, with system
+// calls only (async-signal-safe: for a signal handler).
+void removeNow(int parent, const char* name, int depth) {
+  if (::unlinkat(parent, name, 0) == 0 || (errno != EISDIR && errno != EPERM) || depth > 32) return;
+  const int fd = ::openat(parent, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) return;
+  alignas(8) char entries[4096];
+  for (bool removed = true; removed;) {  // from the start again after each batch: removal moves entries
+    removed = false;
+    ::lseek(fd, 0, SEEK_SET);
+    const long n = ::syscall(SYS_getdents64, fd, entries, sizeof entries);
+    // struct linux_dirent64: inode (8 bytes), offset (8), record length (2), type (1), name.
+    for (long at = 0; at < n;) {
+      unsigned short length = 0;
+      std::memcpy(&length, entries + at + 16, sizeof length);
+      const char* entry = entries + at + 19;
+      at += length;
+      if (std::strcmp(entry, ".") == 0 || std::strcmp(entry, "..") == 0) continue;
+      removeNow(fd, entry, depth + 1);
+      removed = true;
+    }
+  }
+  ::close(fd);
+  ::unlinkat(parent, name, AT_REMOVEDIR);
+}
+
+// The signals that end the process at once, and what they did before springy's handler.
+constexpr int kFatalSignals[] = {SIGQUIT, SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGSYS, SIGALRM, SIGUSR1,
+                                 SIGUSR2, SIGVTALRM, SIGPROF, SIGXCPU, SIGPWR};
+struct sigaction previousActions[NSIG];
+
+void onFatalSignal(int signal, siginfo_t* info, void*) {
+  const pid_t self = ::getpid();
+  for (TemporarySlot& slot : temporaries) {
+    if (slot.state.load(std::memory_order_acquire) != 2 || slot.owner != self) continue;
+    if (slot.folder) {
+      removeNow(AT_FDCWD, slot.path, 0);
+    } else {
+      ::unlink(slot.path);
+    }
+  }
+  // Then what the signal did before (the default: end, with a core dump for a crash; or a
+  // sanitizer's report). A fault the kernel raised happens again when the handler returns.
+  ::sigaction(signal, &previousActions[signal], nullptr);
+  const bool fault = signal == SIGSEGV || signal == SIGBUS || signal == SIGFPE || signal == SIGILL;
+  if (!(fault && info && info->si_code > 0)) ::raise(signal);
+}
 
 // The directory part of `path` with its trailing '/', or "" for a bare name.
 std::string directoryOf(const std::string& path) {
@@ -58,6 +121,25 @@ int interruptedExitStatus() {
   return 128 + (s != 0 ? s : SIGINT);
 }
 
+int registerTemporary(const std::string& path, bool folder) {
+  if (path.size() >= PATH_MAX) return -1;
+  for (int k = 0; k < static_cast<int>(std::size(temporaries)); ++k) {
+    TemporarySlot& slot = temporaries[k];
+    int expected = 0;
+    if (!slot.state.compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(slot.path, path.c_str(), path.size() + 1);
+    slot.owner = ::getpid();
+    slot.folder = folder;
+    slot.state.store(2, std::memory_order_release);
+    return k;
+  }
+  return -1;
+}
+
+void forgetTemporary(int handle) {
+  if (handle >= 0) temporaries[handle].state.store(0, std::memory_order_release);
+}
+
 void installInterruptHandler() {
   struct sigaction action {};
   action.sa_handler = onSignal;
@@ -75,6 +157,48 @@ void installInterruptHandler() {
   sigemptyset(&ignore.sa_mask);
   ::sigaction(SIGPIPE, &ignore, nullptr);
   ::sigaction(SIGXFSZ, &ignore, nullptr);
+  struct sigaction fatal {};
+  fatal.sa_sigaction = onFatalSignal;
+  fatal.sa_flags = SA_SIGINFO;
+  sigemptyset(&fatal.sa_mask);
+  for (const int signal : kFatalSignals) {
+    if (::sigaction(signal, nullptr, &previousActions[signal]) != 0) continue;
+    if (previousActions[signal].sa_handler == SIG_IGN) continue;  // ignored by the parent: stays so
+    ::sigaction(signal, &fatal, nullptr);
+  }
+}
+
+void refuseInputs(const std::string& target, const std::vector<std::string>& inputs) {
+  for (const std::string& input : inputs) {
+    if (sameFile(target, input)) {
+      throw Error(target + ": is the input file '" + input + "'; refusing to write over it");
+    }
+  }
+}
+
+std::string firstBytes(const std::string& path, std::size_t count) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return {};
+  std::string bytes(count, '\0');
+  std::size_t got = 0;
+  while (got < count) {
+    const ssize_t n = ::read(fd, bytes.data() + got, count - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    got += static_cast<std::size_t>(n);
+  }
+  ::close(fd);
+  bytes.resize(got);
+  return bytes;
+}
+
+void refuseUnlessSpringys(const std::string& path, std::string_view header, const std::string& whose) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return;  // nothing there (or nothing readable: AtomicFile says why)
+  if (S_ISREG(st.st_mode) && firstBytes(path, header.size()) == header) return;
+  throw Error(path + ": exists and was not written by springy (it does not begin with \"" +
+              std::string(header.substr(0, header.find('\0'))) + "\"); " + whose +
+              ": refusing to replace it. Move it away, or name another output");
 }
 
 bool isDirectory(const std::string& path) {
@@ -110,11 +234,7 @@ void makeDirectories(const std::string& path, const std::string& what) {
 AtomicFile::AtomicFile(std::string target, const std::vector<std::string>& inputs) : target_(std::move(target)) {
   if (target_.empty()) throw Error("an output file name is empty");
   if (target_.back() == '/' || isDirectory(target_)) throw Error(target_ + ": is a directory, expected a file name");
-  for (const std::string& input : inputs) {
-    if (sameFile(target_, input)) {
-      throw Error(target_ + ": is the input file '" + input + "'; refusing to write over it");
-    }
-  }
+  refuseInputs(target_, inputs);
   resolved_ = followLinks(target_);
   mode_t mode = 0;
   struct stat st {};
@@ -152,11 +272,13 @@ AtomicFile::AtomicFile(std::string target, const std::vector<std::string>& input
   }
   fd_ = fd;
   temporary_ = buffer;
+  registered_ = registerTemporary(temporary_, false);
 }
 
 AtomicFile::~AtomicFile() {
   if (fd_ >= 0) ::close(fd_);
   if (!committed_ && !temporary_.empty()) ::unlink(temporary_.c_str());
+  forgetTemporary(registered_);
 }
 
 void AtomicFile::fail(const std::string& what, int error) {
@@ -198,6 +320,8 @@ void AtomicFile::commit() {
     fail("cannot rename the finished output into place", errno);
   }
   committed_ = true;
+  forgetTemporary(registered_);
+  registered_ = -1;
   // Make the rename itself durable. Best effort: some file systems cannot sync a directory, and
   // the output is complete either way.
   const std::string directory = directoryOf(resolved_);

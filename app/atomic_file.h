@@ -53,11 +53,24 @@ class AtomicFile {
   std::string target_;    // as the user named it (for messages)
   std::string resolved_;  // the file that is replaced: target_ with symbolic links followed
   std::string temporary_;
+  int registered_ = -1;  // registerTemporary's handle
   int fd_ = -1;
   std::uint64_t written_ = 0;  // bytes through write()
   bool usedWrite_ = false;
   bool committed_ = false;
 };
+
+// Throws springy::Error unless `target` is none of `inputs` (the same file, links followed): "TARGET:
+// is the input file 'INPUT'; refusing to write over it". An output never replaces what it is made from.
+void refuseInputs(const std::string& target, const std::vector<std::string>& inputs);
+
+// For a file a command writes without the user naming it (an export's companion: a point cache's
+// .obj and .mtl): an existing `path` is replaced only if springy wrote it, which it tells by its
+// first bytes (`header`, e.g. "# springy export"). Otherwise throws springy::Error "PATH: exists
+// and was not written by springy (...); `whose`; move it away or ...".
+void refuseUnlessSpringys(const std::string& path, std::string_view header, const std::string& whose);
+// The first `count` bytes of `path` ("" when it cannot be read).
+std::string firstBytes(const std::string& path, std::size_t count);
 
 // Writes `text` to `path` through an AtomicFile (complete or not at all). Throws springy::Error.
 void writeFileAtomically(const std::string& path, std::string_view text, const std::vector<std::string>& inputs = {});
@@ -77,7 +90,9 @@ void makeDirectories(const std::string& path, const std::string& what);
 bool sameFile(const std::string& a, const std::string& b);
 
 // SIGINT, SIGTERM and SIGHUP set a flag instead of killing the process; long loops poll it and
-// stop, so temporary files are removed. SIGPIPE and SIGXFSZ are ignored, so that writing to a
+// stop, so temporary files are removed. The signals that end a process at once (SIGQUIT, the
+// crashes SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, and the other default-fatal ones) remove the
+// temporaries first (registerTemporary), then end it as they would have. SIGPIPE and SIGXFSZ are ignored, so that writing to a
 // closed pipe or past the file size limit fails with EPIPE or EFBIG (and is reported) instead
 // of killing the process silently mid-write. A signal the parent set to be ignored (nohup) stays
 // ignored.
@@ -88,5 +103,12 @@ void installInterruptHandler();
 // The exit status of an interrupted run: 128 + the signal's number, as a shell reports a process
 // killed by it (130 for SIGINT, 129 for SIGHUP, 143 for SIGTERM).
 int interruptedExitStatus();
+
+// The temporary files and folders that exist now (AtomicFile's, OutputFolder's), so that a signal
+// that ends the process at once (SIGQUIT, SIGABRT, SIGSEGV, SIGBUS, ...: installInterruptHandler
+// catches them) still removes them before it ends it. registerTemporary returns a handle for
+// forgetTemporary (-1 when the table is full: the destructor still removes it on the normal paths).
+int registerTemporary(const std::string& path, bool folder);
+void forgetTemporary(int handle);
 
 }  // namespace springy

@@ -1,4 +1,7 @@
 // `springy check`: runs scenes headlessly under the stability monitor and reports per body.
+#include <sys/stat.h>
+
+#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +14,7 @@
 #include "app/commands.h"
 #include "app/export.h"
 #include "app/run_outputs.h"
+#include "run/load.h"
 #include "run/run.h"
 #include "sim/error.h"
 
@@ -20,7 +24,8 @@ namespace {
 enum class CheckedScene { Ok, Failed, Interrupted };
 
 // One scene's run with its outputs (trace rows, export) and its table; `record` receives its record.
-CheckedScene checkScene(const std::string& path, const CheckOptions& options, SceneRecord& record,
+CheckedScene checkScene(const std::string& path, const CheckOptions& options, const std::vector<std::string>& inputs,
+                        SceneRecord& record,
                         const std::string& exportPath, std::ofstream* trace, const std::string& traceTemporary) {
   const std::string who = "springy " + options.command + ": ";  // messages' prefix
   try {
@@ -31,7 +36,7 @@ CheckedScene checkScene(const std::string& path, const CheckOptions& options, Sc
     std::optional<TraceRows> rows;
     if (trace) run.observe(rows.emplace(*trace, traceTemporary));
     std::optional<ExportFrames> exported;
-    if (!exportPath.empty()) run.observe(exported.emplace(exportPath, options.scenes));
+    if (!exportPath.empty()) run.observe(exported.emplace(exportPath, inputs));
     const std::optional<Failure> failure = run.complete();
     if (interrupted()) return CheckedScene::Interrupted;
     record = run.record();
@@ -66,7 +71,18 @@ CheckedScene checkScene(const std::string& path, const CheckOptions& options, Sc
 std::vector<std::string> exportOutputs(const std::vector<std::string>& scenes, const std::string& output,
                                        const std::string& format, const std::string& option) {
   namespace fs = std::filesystem;
-  const bool directory = isDirectory(output) || (!output.empty() && output.back() == '/') || scenes.size() > 1;
+  if (output.empty()) throw Error(option + ": the output's name is empty: give a file or a folder");
+  const bool directory = isDirectory(output) || output.back() == '/' || scenes.size() > 1;
+  if (scenes.size() > 1 && !isDirectory(output)) {
+    // A name with a format's extension, or a file that exists, cannot be the folder they go to.
+    std::string extension = fs::path(output).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    struct stat st {};
+    if (extension == ".pc2" || extension == ".glb" || extension == ".pvd" || ::lstat(output.c_str(), &st) == 0) {
+      throw Error(option + " " + output + ": " + std::to_string(scenes.size()) +
+                  " scenes make one export each: give a folder (ending in '/'), not a file name");
+    }
+  }
   if (!directory) {
     exportFormatOf(output, option);  // a file: its extension must name a format
     return {output};
@@ -80,6 +96,12 @@ std::vector<std::string> exportOutputs(const std::vector<std::string>& scenes, c
     for (std::size_t j = 0; j < outputs.size(); ++j) {
       if (outputs[j] == file) throw Error(scenes[j] + " and " + scene + " would both be exported to " + file);
     }
+    // The name is springy's choice, not the user's: it may replace only an export springy wrote.
+    struct stat st {};
+    if (::lstat(file.c_str(), &st) == 0 && !exportWrittenBySpringy(file)) {
+      throw Error(file + ": exists and was not written by springy (" + option + " " + output + " exports " + scene +
+                  " to it); refusing to replace it. Move it away, or name another folder");
+    }
     outputs.push_back(file);
   }
   return outputs;
@@ -90,22 +112,24 @@ int runCheck(const CheckOptions& options) {
       options.exportOutput.empty()
           ? std::vector<std::string>{}
           : exportOutputs(options.scenes, options.exportOutput, options.exportFormat, options.exportOption);
+  // Every file the scenes read, known before any run: no output replaces one.
+  const std::vector<std::string> inputs = sceneInputFiles(options.scenes, options.run.sets);
   std::unique_ptr<AtomicFile> traceFile;
   std::ofstream trace;
   if (!options.trace.empty()) {
-    traceFile = std::make_unique<AtomicFile>(options.trace, options.scenes);  // never over a scene
+    traceFile = std::make_unique<AtomicFile>(options.trace, inputs);  // never over a scene or its mesh
     trace.open(traceFile->temporaryPath());
     writeTraceHeader(trace);
   }
   // Checked before any run: an unwritable --json or --junit fails at once, and no scene is replaced.
   std::unique_ptr<AtomicFile> jsonFile, junitFile;
-  if (!options.json.empty()) jsonFile = std::make_unique<AtomicFile>(options.json, options.scenes);
-  if (!options.junit.empty()) junitFile = std::make_unique<AtomicFile>(options.junit, options.scenes);
+  if (!options.json.empty()) jsonFile = std::make_unique<AtomicFile>(options.json, inputs);
+  if (!options.junit.empty()) junitFile = std::make_unique<AtomicFile>(options.junit, inputs);
   std::vector<SceneRecord> records;
   int failures = 0;
   for (std::size_t sceneIndex = 0; sceneIndex < options.scenes.size(); ++sceneIndex) {
     const std::string& path = options.scenes[sceneIndex];
-    const CheckedScene checked = checkScene(path, options, records.emplace_back(), exports.empty() ? "" : exports[sceneIndex],
+    const CheckedScene checked = checkScene(path, options, inputs, records.emplace_back(), exports.empty() ? "" : exports[sceneIndex],
                                             trace.is_open() ? &trace : nullptr,
                                             traceFile ? traceFile->temporaryPath() : std::string());
     if (checked == CheckedScene::Interrupted) {

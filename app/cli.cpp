@@ -33,6 +33,14 @@ const CLI::Validator kFraction(
     },
     "FRACTION in [0, 1]");
 
+// An output's name (-o, --trace, --json, ...): an empty one would fall back to a default place
+// (the working directory) or to writing nothing at all, silently.
+const CLI::Validator kOutputName(
+    [](const std::string& text) -> std::string {
+      return text.empty() ? "the output's name is empty: give a file or a folder" : std::string();
+    },
+    "NAME");
+
 // The run options (run/options.h), one CLI11 option per row of the table: the row's setter
 // checks the text and its error becomes CLI11's, so a bad value fails the parse with the message
 // the Python module gives for it too. `criteria`: also check's criteria (--min-volume, ...).
@@ -93,15 +101,17 @@ void CommandLine::addCheck() {
   checkCmd = app.add_subcommand("check", "Run scenes headlessly and check stability; per-body report");
   checkCmd->add_option("scenes", check.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   addRunOptions(checkCmd, check.run, true);
-  checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV");
-  checkCmd->add_option("--json", check.json, "Write the per-body results as JSON (the records `sweep` gathers)");
+  checkCmd->add_option("--trace", check.trace, "Write per-frame centroid, volume and energies as CSV")->check(kOutputName);
+  checkCmd->add_option("--json", check.json, "Write the per-body results as JSON (the records `sweep` gathers)")->check(kOutputName);
   checkCmd->add_option("--junit", check.junit,
-                       "Write the results as JUnit XML: a test case per scene and body, failures with the message");
+                       "Write the results as JUnit XML: a test case per scene and body, failures with the message")
+      ->check(kOutputName);
 
   checkCmd
       ->add_option("--export", check.exportOutput,
                    "Also write the run's motion: FILE.pc2 (Blender's point cache, with FILE.obj), FILE.glb (glTF 2.0) "
-                   "or FILE.pvd (ParaView's .vtu series), or a directory (several scenes; --export-format)");
+                   "or FILE.pvd (ParaView's .vtu series), or a directory (several scenes; --export-format)")
+      ->check(kOutputName);
   checkCmd->add_option("--export-format", check.exportFormat, "With --export DIR: pc2, glb or pvd")
       ->check(CLI::IsMember({"pc2", "glb", "pvd"}))
       ->capture_default_str();
@@ -118,7 +128,8 @@ void CommandLine::addExport() {
                    "FILE.pc2 (Blender's point cache, with FILE.obj and FILE.mtl), FILE.glb (glTF 2.0 binary) or "
                    "FILE.pvd (ParaView's time series, with the folder FILE/ of .vtu files); or a directory that "
                    "gets SCENE.EXT for each scene (--format)")
-      ->required();
+      ->required()
+      ->check(kOutputName);
   exportRun.exportOption = "-o";
   exportRun.command = "export";
   exportCmd->add_option("--format", exportRun.exportFormat, "With -o DIR: pc2, glb or pvd")
@@ -127,8 +138,8 @@ void CommandLine::addExport() {
   exportCmd->add_option("--fps", exportFps, "Frames per second written (default: the scene's [render] fps)")
       ->check(CLI::Range(1.0, 240.0));
   addRunOptions(exportCmd, exportRun.run, true);
-  exportCmd->add_option("--trace", exportRun.trace, "Also write check's per-frame trace (CSV)");
-  exportCmd->add_option("--json", exportRun.json, "Also write check's per-body results as JSON");
+  exportCmd->add_option("--trace", exportRun.trace, "Also write check's per-frame trace (CSV)")->check(kOutputName);
+  exportCmd->add_option("--json", exportRun.json, "Also write check's per-body results as JSON")->check(kOutputName);
 }
 
 // Adds `suggest`: the stability advisor's step and values for scenes.
@@ -155,7 +166,9 @@ void CommandLine::addStudy() {
       ->add_option("--max-duration", study.maxDuration,
                    "contact: study at most this many seconds of each scene (default: all of it)")
       ->check(CLI::PositiveNumber);
-  studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")->capture_default_str();
+  studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")
+      ->capture_default_str()
+      ->check(kOutputName);
   studyCmd
       ->add_option("--scenes", study.scenes,
                    "Scenes for the accuracy and contact studies and the stability study's whole runs (default: the showcase scenes)")
@@ -171,7 +184,8 @@ void CommandLine::addRender() {
   renderCmd = app.add_subcommand("render", "Simulate scenes and encode MP4 videos (H.264)");
   renderCmd->add_option("scenes", render.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
   renderCmd->add_option("-o,--output", render.output,
-                        "Output .mp4 for one scene, or a directory (default: SCENE.mp4 here)");
+                        "Output .mp4 for one scene, or a directory (default: SCENE.mp4 here)")
+      ->check(kOutputName);
   addRunOptions(renderCmd, render.run, false);
   addRenderOverrides(renderCmd, render.render);
   renderCmd->add_option("--crf", render.render.crf, "H.264 quality, 0-51, lower is better");
@@ -182,7 +196,7 @@ void CommandLine::addRender() {
 void CommandLine::addFrames() {
   framesCmd = app.add_subcommand("frames", "Write PNG stills at chosen times, and a contact sheet");
   framesCmd->add_option("scenes", frames.scenes, "Scene files (.toml)")->required()->check(CLI::ExistingFile);
-  framesCmd->add_option("-o,--output", frames.output, "Output directory")->capture_default_str();
+  framesCmd->add_option("-o,--output", frames.output, "Output directory")->capture_default_str()->check(kOutputName);
   framesCmd->add_option("--times", frames.times, "Comma-separated times in seconds (default: 8 evenly spaced)");
   framesCmd->add_flag("--sheet", frames.sheet, "Also write SCENE_sheet.png, a labelled grid of the stills");
   framesCmd->add_flag("--sheet-only", frames.sheetOnly, "Write only the contact sheet");
@@ -197,7 +211,8 @@ void CommandLine::addReport() {
                 "and a study, to open in a browser (docs/report.md)");
   reportCmd->add_option("scenes", report.scenes, "Scene files (.toml)")->check(CLI::ExistingFile);
   reportCmd->add_option("-o,--output", report.output, "The report's folder (replaced if springy wrote it before)")
-      ->required();
+      ->required()
+      ->check(kOutputName);
   addRunOptions(reportCmd, report.run, true);
   reportCmd->add_option("--width", reportWidth, "Video width in pixels (even)")->check(CLI::Range(16, 7680));
   reportCmd->add_option("--height", reportHeight, "Video height in pixels (even)")->check(CLI::Range(16, 4320));
@@ -217,7 +232,8 @@ void CommandLine::addSweep() {
   sweepCmd = app.add_subcommand("sweep", "Run a scene (or several) over a grid or list of settings (docs/sweeps.md)");
   sweepCmd->add_option("spec", sweep.spec, "Sweep spec (.toml)")->required()->check(CLI::ExistingFile);
   sweepCmd->add_option("-o,--output", sweep.output,
-                       "Directory of the manifest, results and table (default: SPEC's name + .sweep, here)");
+                       "Directory of the manifest, results and table (default: SPEC's name + .sweep, here)")
+      ->check(kOutputName);
   sweepCmd
       ->add_option("-j,--jobs", sweep.jobs,
                    "At most this many tasks at once (default: one per core; never more threads than cores in all)")

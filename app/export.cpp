@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 
+#include "app/atomic_file.h"
 #include "sim/error.h"
 
 namespace springy {
@@ -37,6 +39,23 @@ const char* exportExtension(ExportFormat format) {
     case ExportFormat::VtkSeries: return ".pvd";
   }
   return "";
+}
+
+bool exportWrittenBySpringy(const std::string& path) {
+  namespace fs = std::filesystem;
+  const std::string beside = fs::path(path).replace_extension("").string();
+  switch (exportFormatOf(path, "-o")) {
+    case ExportFormat::Gltf: {
+      const std::string head = firstBytes(path, 1 << 16);
+      return head.rfind("glTF", 0) == 0 && head.find("\"generator\":\"springy") != std::string::npos;
+    }
+    case ExportFormat::PointCache:
+      return firstBytes(path, 12) == std::string("POINTCACHE2\0", 12) &&
+             firstBytes(beside + ".obj", 16) == "# springy export";
+    case ExportFormat::VtkSeries:
+      return firstBytes(path, 5) == "<?xml" && fs::exists(beside + "/.springy-series");
+  }
+  return false;
 }
 
 namespace {

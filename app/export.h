@@ -34,6 +34,12 @@ ExportFormat exportFormatOf(const std::string& path, const std::string& option);
 // The extension each format is written with (".pc2", ".glb", ".pvd").
 const char* exportExtension(ExportFormat format);
 
+// Whether the export at `path` (its format by extension) is one that springy wrote: a .glb whose
+// asset names springy as its generator, a .pc2 beside a .obj that springy wrote, a .pvd beside a
+// folder with springy's marker. For a name springy chose itself (-o DIR: DIR/SCENE.EXT), which
+// may replace only springy's own file.
+bool exportWrittenBySpringy(const std::string& path);
+
 // One exported body: the drawn mesh's topology and how its vertices follow the model.
 struct ExportBody {
   std::string name;

@@ -10,6 +10,8 @@
 #include <limits>
 #include <cstring>
 #include <filesystem>
+#include <string_view>
+#include <sys/stat.h>
 
 #include "app/atomic_file.h"
 #include "app/export.h"
@@ -58,6 +60,31 @@ std::string mtlEntry(const std::string& name, const Material& m) {
   return "newmtl " + name + "\n" + line;
 }
 
+// The first bytes of the files springy writes beside a cache: what tells them from a user's.
+constexpr std::string_view kCompanionHeader = "# springy export";
+constexpr std::string_view kCacheHeader{"POINTCACHE2\0", 12};
+
+// A file the cache `cache` is written with (its .obj, .mtl, a moving collider's cache), named by the
+// cache's name and not by the user: it may replace neither an input of the run nor a file that
+// springy did not write (`springys`: whether the existing file is springy's). Throws springy::Error.
+void checkCompanion(const std::string& cache, const std::string& companion, const std::vector<std::string>& inputs,
+                    bool springys) {
+  namespace fs = std::filesystem;
+  const std::string why = cache + " is written with " + companion + " beside it";
+  const std::string other = (fs::path(cache).parent_path() / (fs::path(cache).stem().string() + "_motion.pc2")).string();
+  for (const std::string& input : inputs) {
+    if (sameFile(companion, input)) {
+      throw Error(companion + ": is the input file '" + input + "' (" + why +
+                  "); refusing to write over it. Name the export otherwise, e.g. -o " + other);
+    }
+  }
+  struct stat st {};
+  if (!springys && ::stat(companion.c_str(), &st) == 0) {
+    throw Error(companion + ": exists and was not written by springy (" + why +
+                "); refusing to replace it. Move it away, or name the export otherwise, e.g. -o " + other);
+  }
+}
+
 class PointCacheExport final : public MotionExport {
  public:
   PointCacheExport(const std::string& path, const SceneDesc& scene, const World& world, long frames,
@@ -67,6 +94,21 @@ class PointCacheExport final : public MotionExport {
     const fs::path target(path);
     objPath_ = fs::path(target).replace_extension(".obj").string();
     mtlPath_ = fs::path(target).replace_extension(".mtl").string();
+    // The files beside the cache replace only springy's own: an OBJ and MTL it wrote begin with its
+    // header; a moving collider's cache is a PC2 that the springy OBJ beside it names.
+    const std::string oldObj = firstBytes(objPath_, 1 << 16);
+    const bool objSpringys = oldObj.rfind(kCompanionHeader, 0) == 0;
+    checkCompanion(path, objPath_, inputs, objSpringys);
+    checkCompanion(path, mtlPath_, inputs, firstBytes(mtlPath_, kCompanionHeader.size()) == kCompanionHeader);
+    std::vector<std::string> movingNames;
+    for (const ColliderMesh& m : moving_) {
+      const std::string name = fs::path(target).replace_extension("." + m.word() + ".pc2").string();
+      const std::string file = fs::path(name).filename().string();
+      checkCompanion(path, name, inputs,
+                     firstBytes(name, kCacheHeader.size()) == kCacheHeader && objSpringys &&
+                         oldObj.find(" " + file + "\n") != std::string::npos);
+      movingNames.push_back(name);
+    }
     // All are created now: a directory that cannot take them fails before the run.
     cache_ = std::make_unique<AtomicFile>(path, inputs);
     obj_ = std::make_unique<AtomicFile>(objPath_, inputs);
@@ -74,9 +116,9 @@ class PointCacheExport final : public MotionExport {
     for (const ExportBody& b : bodies_) points_ += b.vertexCount();
     writeHeader(*cache_, points_, frames + 1);
     // A cache per moving collider or prop, beside the bodies': FILE.collider0.pc2.
-    for (const ColliderMesh& m : moving_) {
-      const std::string name = fs::path(target).replace_extension("." + m.word() + ".pc2").string();
-      writeHeader(*movingCaches_.emplace_back(std::make_unique<AtomicFile>(name, inputs)), m.xyz.size() / 3, frames + 1);
+    for (std::size_t j = 0; j < moving_.size(); ++j) {
+      auto& cache = movingCaches_.emplace_back(std::make_unique<AtomicFile>(movingNames[j], inputs));
+      writeHeader(*cache, moving_[j].xyz.size() / 3, frames + 1);
     }
     (void)frameTime;
   }
@@ -127,9 +169,11 @@ class PointCacheExport final : public MotionExport {
                        std::to_string(bodies_.size()) + " bodies, " + std::to_string(points_) +
                        " points, the first of " + std::to_string(frames_ + 1) + " frames; " +
                        fs::path(cache_->target()).filename().string() + " holds them all\n";
+    // Each moving object's cache is named, one a line: the next export knows them as springy's.
     if (!moving_.empty()) {
       text += "# then each collider and prop that moves (" + std::to_string(moving_.size()) +
-              "): an object, whose points " + fs::path(cache_->target()).stem().string() + ".NAME.pc2 holds\n";
+              "): an object, whose points a cache of its own holds:\n";
+      for (const auto& c : movingCaches_) text += "#   " + fs::path(c->target()).filename().string() + "\n";
     }
     text += "mtllib " + fs::path(mtlPath_).filename().string() + "\no springy\n";
     appendVertices(sample, text);

@@ -10,7 +10,8 @@
 //
 // The folder is built under a temporary name beside it and renamed when the run is complete; a
 // folder of an earlier export is replaced then, one that springy did not make (no marker file
-// in it) is refused before the run.
+// in it), or that holds files it did not write or an input of the run, is refused before the run
+// (app/folder.h).
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -109,7 +110,7 @@ class VtkSeriesExport final : public MotionExport {
     output_ = std::make_unique<OutputFolder>(
         folder_, kMarker,
         "springy export: this folder is replaced by the next export of " + fs::path(path).filename().string() + "\n",
-        path + ": its frames go to the folder " + folder_);
+        path + ": its frames go to the folder " + folder_, inputs);
     for (const ExportBody& b : bodies_) {
       std::vector<uint32_t> indices;
       for (const Triangle& t : b.triangles) indices.insert(indices.end(), t.begin(), t.end());

@@ -23,6 +23,7 @@
 #include "render/error.h"
 #include "render/image.h"
 #include "render/video_encoder.h"
+#include "run/load.h"
 #include "sim/error.h"
 #include "sim/trajectory.h"
 
@@ -181,8 +182,9 @@ int renderOne(const std::string& path, const std::string& outPath, const RenderO
   // A scene that gives no step: the drawn run is the try of the advisor's default step.
   Run run(path, options.run, renderEdit(options.render));
   const SceneDesc& scene = run.scene();
-  // An unwritable target fails here, before any simulation; no scene is ever written over.
-  AtomicFile output(outPath, options.scenes);
+  // An unwritable target fails here, before any simulation; no scene (or a file one reads) is
+  // ever written over.
+  AtomicFile output(outPath, sceneInputFiles(options.scenes, options.run.sets));
   render::RenderSettings rs = renderSettingsOf(scene);
   rs.profilePasses = env.profilePasses;
   if (env.msaa) rs.antiAliasMethod = render::AntiAliasMethod::Msaa4;
@@ -302,9 +304,11 @@ std::optional<int> framesRun(Run& run, const FramesOptions& options, const std::
               << " not written\n";
     return interruptedExitStatus();
   };
-  // Writes a PNG through the one checked writer: a full disk is an error, never a truncated file.
+  // Writes a PNG through the one checked writer: a full disk is an error, never a truncated file,
+  // and never over a file a scene reads.
+  const std::vector<std::string> inputs = sceneInputFiles(options.scenes, options.run.sets);
   auto write = [&](const std::string& file, const render::Image& image) {
-    AtomicFile out(file, options.scenes);
+    AtomicFile out(file, inputs);
     out.write(render::encodePng(image));
     out.commit();
     std::printf("%s\n", file.c_str());

@@ -12,7 +12,8 @@
 // opened from a USB stick. Each scene is run once (run/run.h): its video and contact sheet are
 // drawn from the run's frames while its trace, records, replay and plots are taken from the same
 // frames. The folder is built under a temporary name and renamed when complete
-// (OutputFolder): a failure or a signal leaves the earlier report as it was.
+// (OutputFolder): a failure or a signal leaves the earlier report as it was, and a file that the
+// user added to it stops the report before it runs (nothing is lost).
 #include <cmark-gfm-core-extensions.h>
 #include <cmark-gfm.h>
 
@@ -41,6 +42,7 @@
 #include "app/scene_view.h"
 #include "render/image.h"
 #include "render/video_encoder.h"
+#include "run/load.h"
 #include "run/records.h"
 #include "run/run.h"
 #include "sim/error.h"
@@ -802,8 +804,14 @@ int runReport(const ReportOptions& o) {
       if (scenes[j].stem == s.stem) throw Error("report: " + scenes[j].path + " and " + path + " share the name " + s.stem);
     }
   }
+  // What the report reads (the scenes' files, the sweep's and study's folders) must not be in the
+  // folder it replaces.
+  std::vector<std::string> inputs = sceneInputFiles(o.scenes, o.run.sets);
+  for (const std::string& folder : {o.sweep, o.study}) {
+    if (!folder.empty()) inputs.push_back(folder);
+  }
   OutputFolder out(o.output, kMarker, "springy report: this folder is replaced by the next report written to it\n",
-                   "-o " + o.output);
+                   "-o " + o.output, inputs);
   const fs::path root(out.temporaryPath());
   makeDirectories((root / "assets").string(), "report");
   writeText(root / "assets" / "viewer.js",

@@ -1,5 +1,6 @@
 #include "app/run_outputs.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <system_error>
@@ -73,7 +74,12 @@ void TraceRows::frame(const Run& run) {
 
 void ExportFrames::started(const Run& run) {
   exporter_.reset();  // a failed try's output is removed before the next is opened
-  exporter_ = open_(path_, run.scene(), run.world(), run.frames(), run.frameTime(), inputs_);
+  // The command's inputs and the files this scene was read from (scene/scene.h SceneDesc::inputs).
+  std::vector<std::string> inputs = inputs_;
+  for (const std::string& file : run.scene().inputs) {
+    if (std::find(inputs.begin(), inputs.end(), file) == inputs.end()) inputs.push_back(file);
+  }
+  exporter_ = open_(path_, run.scene(), run.world(), run.frames(), run.frameTime(), inputs);
   exporter_->frame(run.world(), run.monitor());
 }
 

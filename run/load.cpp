@@ -1,6 +1,7 @@
 #include "run/load.h"
 
 #include <toml++/toml.h>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -107,6 +108,33 @@ SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::strin
     for (const std::string& setting : sets) all += (all.empty() ? "" : ", ") + setting;
     throw Error(path + ": with --set " + all + ": " + withoutLocation(e.what(), path));
   }
+}
+
+std::vector<std::string> sceneInputFiles(const std::string& path, const std::vector<std::string>& sets) {
+  try {
+    checkInputFile(path, kMaxSceneFileBytes, "scene file");
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (sets.empty()) return sceneInputs(text.str(), path);
+    toml::table root = toml::parse(text.str(), path);
+    for (const std::string& setting : sets) applySetting(root, setting);
+    std::ostringstream changed;
+    changed << toml::toml_formatter(root);
+    return sceneInputs(changed.str(), path);
+  } catch (const std::exception&) {  // Error, toml::parse_error: reported when the scene is loaded
+    return {path};
+  }
+}
+
+std::vector<std::string> sceneInputFiles(const std::vector<std::string>& paths, const std::vector<std::string>& sets) {
+  std::vector<std::string> out;
+  for (const std::string& path : paths) {
+    for (std::string& file : sceneInputFiles(path, sets)) {
+      if (std::find(out.begin(), out.end(), file) == out.end()) out.push_back(std::move(file));
+    }
+  }
+  return out;
 }
 
 SceneDesc loadSceneWith(const std::string& path, const RunOptions& options, bool advise, bool* runIsTry) {

@@ -20,6 +20,13 @@ namespace springy {
 // error of the scene file itself keeps its own line).
 SceneDesc loadSceneSetting(const std::string& path, const std::vector<std::string>& sets);
 
+// The files the scene at `path` reads with `sets` applied (scene/scene.h sceneInputs), without
+// loading it: what a command's outputs are checked against before any run. A scene that cannot
+// be read gives {path} (its error comes when it is loaded).
+std::vector<std::string> sceneInputFiles(const std::string& path, const std::vector<std::string>& sets);
+// The same for every scene of a command, each file once.
+std::vector<std::string> sceneInputFiles(const std::vector<std::string>& paths, const std::vector<std::string>& sets);
+
 // Loads a scene and applies the options. Throws springy::Error. advise: run the stability
 // advisor (warn on stderr when the step exceeds its estimate; pick --substeps auto) and print the
 // bodies' notes; without it nothing is printed (a sweep validating its points).

@@ -3,6 +3,7 @@
 #include <toml++/toml.h>
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -989,10 +990,101 @@ void readRender(const toml::table& table, const std::string& path, RenderDesc& r
 
 }  // namespace
 
+namespace {
+
+bool fileExists(const std::string& path) {
+  std::error_code error;
+  return std::filesystem::is_regular_file(path, error);
+}
+
+// The whitespace-separated words of a line.
+std::vector<std::string> wordsOf(const std::string& line) {
+  std::istringstream in(line);
+  return {std::istream_iterator<std::string>(in), std::istream_iterator<std::string>()};
+}
+
+// What a mesh reader (assimp) reads beside the mesh `file`: an OBJ's material libraries ("mtllib
+// A.mtl B.mtl") and the textures they name (map_Kd, bump, ...: the last word of the line, after
+// its options); a glTF's buffers and images (each "uri" that is not a data: URI). Files that exist.
+void filesBeside(const std::string& file, std::vector<std::string>& out) {
+  namespace fs = std::filesystem;
+  std::string extension = fs::path(file).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const auto add = [&](const std::string& name) {
+    const std::string f = resolvePath(file, name);
+    if (fileExists(f) && std::find(out.begin(), out.end(), f) == out.end()) out.push_back(f);
+  };
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  if (extension == ".obj") {
+    while (std::getline(in, line)) {
+      const std::vector<std::string> words = wordsOf(line);
+      if (words.size() < 2 || words[0] != "mtllib") continue;
+      for (std::size_t k = 1; k < words.size(); ++k) {
+        const std::size_t before = out.size();
+        add(words[k]);
+        if (out.size() > before) filesBeside(out.back(), out);
+      }
+    }
+  } else if (extension == ".mtl") {
+    while (std::getline(in, line)) {
+      const std::vector<std::string> words = wordsOf(line);
+      if (words.size() < 2) continue;
+      const std::string& key = words[0];
+      if (key.rfind("map_", 0) == 0 || key == "bump" || key == "disp" || key == "decal" || key == "refl" ||
+          key == "norm") {
+        add(words.back());
+      }
+    }
+  } else if (extension == ".gltf") {
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (std::size_t at = text.find("\"uri\""); at != std::string::npos; at = text.find("\"uri\"", at + 5)) {
+      const std::size_t open = text.find('"', text.find(':', at + 5));
+      const std::size_t close = open == std::string::npos ? open : text.find('"', open + 1);
+      if (close == std::string::npos) break;
+      const std::string uri = text.substr(open + 1, close - open - 1);
+      if (uri.rfind("data:", 0) != 0) add(uri);
+    }
+  }
+}
+
+// The mesh files named by the tables of `key` ("body", "triangles") in a parsed scene.
+void meshesOf(const toml::table& root, std::string_view key, const std::string& path, std::vector<std::string>& out) {
+  const toml::array* tables = root[key].as_array();
+  if (!tables) return;
+  for (const toml::node& item : *tables) {
+    const toml::table* table = item.as_table();
+    const toml::node* mesh = table ? table->get("mesh") : nullptr;
+    if (!mesh || !mesh->is_string()) continue;
+    const std::string file = resolvePath(path, mesh->as_string()->get());
+    if (std::find(out.begin(), out.end(), file) != out.end()) continue;
+    out.push_back(file);
+    filesBeside(file, out);
+  }
+}
+
+std::vector<std::string> inputsOf(const toml::table& root, const std::string& path) {
+  std::vector<std::string> out{path};
+  meshesOf(root, "body", path, out);
+  meshesOf(root, "triangles", path, out);
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> sceneInputs(const std::string& text, const std::string& path) {
+  try {
+    return inputsOf(toml::parse(text, path), path);
+  } catch (const toml::parse_error&) {
+    return {path};
+  }
+}
+
 SceneDesc parseScene(const std::string& text, const std::string& path) {
   const toml::table root = parseToml(text, path);
   SceneDesc scene;
   scene.path = path;
+  scene.inputs = inputsOf(root, path);
   Reader top(root, path, "the scene");
   scene.name = std::filesystem::path(path).stem().string();
 

@@ -83,12 +83,21 @@ struct ViewDesc {
 struct SceneDesc : SimulationDesc {
   std::string name;
   ViewDesc view;
+  // The files the scene was read from (sceneInputs): no output of a run may replace one.
+  std::vector<std::string> inputs;
 };
 
 // Reads and validates a scene file. Throws springy::Error "FILE:LINE:COLUMN: message".
 SceneDesc loadScene(const std::string& path);
 // The same from text in memory (`path` is used in messages and to resolve mesh paths).
 SceneDesc parseScene(const std::string& text, const std::string& path);
+
+// The files a scene's text reads, without reading them: the scene file `path`, each mesh file its
+// bodies and [[triangles]] name and, where they exist, what a mesh reader reads beside a mesh (an
+// OBJ's material libraries and the textures they name, a glTF's buffers and images). Every
+// command checks the files it writes against them before it runs: a user's file is never an
+// output. A text that is not TOML gives {path} (its error is reported when the scene is read).
+std::vector<std::string> sceneInputs(const std::string& text, const std::string& path);
 
 // Why a run with the scene's dt, substeps, duration and frame rate cannot be done, or nothing:
 // a step longer than one frame (no step would fall between two frames), or more than kMaxSteps

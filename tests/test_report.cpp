@@ -148,10 +148,17 @@ TEST_F(ReportTest, AnUnwritablePlaceIsAClearErrorBeforeAnyRun) {
 TEST_F(ReportTest, ReplacesItsOwnReportWhole) {
   const fs::path out = dir_ / "report";
   ASSERT_EQ(run({"report", kTiny, "-o", out.string()}).status, 0);
+  // A file springy did not write stops it before it runs (issue 63: a user's file is never lost)...
   std::ofstream(out / "stale.txt") << "from before";
-  const Result r = run({"report", kTiny, "-o", out.string(), "--duration", "0.5"});
+  Result r = run({"report", kTiny, "-o", out.string(), "--duration", "0.5"});
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_TRUE(has(r.output, (out / "stale.txt").string())) << r.output;
+  EXPECT_FALSE(has(r.output, "steps")) << "ran before refusing: " << r.output;
+  EXPECT_EQ(text(out / "stale.txt"), "from before");
+  // ...and without it the new report replaces the earlier one whole.
+  fs::remove(out / "stale.txt");
+  r = run({"report", kTiny, "-o", out.string(), "--duration", "0.5"});
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_FALSE(fs::exists(out / "stale.txt"));  // the new folder, not the old one added to
   EXPECT_TRUE(has(text(out / "tiny/index.html"), "0.5 s")) << text(out / "tiny/index.html");
   EXPECT_EQ(names(), std::vector<std::string>{"report"});
 }

@@ -69,6 +69,20 @@ void addRunOptions(CLI::App* cmd, RunOptions& o, bool criteria) {
   }
 }
 
+// A CLI11 callback that reads an option's text with `parse` (run/options.h: the same check
+// Python's springy.study() makes), its springy::Error becoming CLI11's, so the parse fails with
+// the words Python raises.
+template <class T, class Parse>
+std::function<void(const std::string&)> parsedInto(T& target, Parse parse) {
+  return [&target, parse](const std::string& text) {
+    try {
+      target = parse(text);
+    } catch (const Error& e) {
+      throw CLI::ValidationError(e.what());
+    }
+  };
+}
+
 void addRenderOverrides(CLI::App* cmd, RenderOverrides& o) {
   cmd->add_option("--width", o.width, "Frame width in pixels (even)");
   cmd->add_option("--height", o.height, "Frame height in pixels (even)");
@@ -159,13 +173,14 @@ void CommandLine::addSuggest() {
 void CommandLine::addStudy() {
   studyCmd = app.add_subcommand(
       "study", "Work-precision study of the integrators (accuracy: before contact; contact: whole runs), or stability");
-  studyCmd->add_option("kind", study.kind, "accuracy, contact or stability")
-      ->required()
-      ->check(CLI::IsMember({"accuracy", "contact", "stability"}));
+  // KIND, --repeats and --max-duration are read as springy.study() reads them (run/options.h).
+  studyCmd->add_option_function<std::string>("kind", parsedInto(study.kind, studyKind), "accuracy, contact or stability")
+      ->type_name("KIND")
+      ->required();
   studyCmd
-      ->add_option("--max-duration", study.maxDuration,
-                   "contact: study at most this many seconds of each scene (default: all of it)")
-      ->check(CLI::PositiveNumber);
+      ->add_option_function<std::string>("--max-duration", parsedInto(study.maxDuration, studyMaxDuration),
+                                         "contact: study at most this many seconds of each scene (default: all of it)")
+      ->type_name("SECONDS");
   studyCmd->add_option("-o,--output", study.output, "Output directory (CSV, Markdown, plots)")
       ->capture_default_str()
       ->check(kOutputName);
@@ -174,9 +189,12 @@ void CommandLine::addStudy() {
                    "Scenes for the accuracy and contact studies and the stability study's whole runs (default: the showcase scenes)")
       ->check(CLI::ExistingFile);
   studyCmd->add_flag("--quick", study.quick, "Small cases and few repeats (seconds; for tests and CI)");
-  studyCmd->add_option("--repeats", study.repeats, "Timed runs per point (the median is reported)")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 1000));
+  studyCmd
+      ->add_option_function<std::string>("--repeats", parsedInto(study.repeats, studyRepeats),
+                                         "Timed runs per point (the median is reported), 1 to " +
+                                             std::to_string(kMaxStudyRepeats))
+      ->type_name("N")
+      ->default_str(std::to_string(study.repeats));
 }
 
 // Adds `render`: MP4 videos of scenes.

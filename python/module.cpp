@@ -4,13 +4,15 @@
 // the stability monitor exactly as `check` steps it (the same advanceTo calls at the same frame
 // times, so the same bits), and its state seen from numpy without a copy. Long calls release the
 // GIL and look for Ctrl-C between frames. Everything that can be wrong with what Python hands in
-// (shapes, NaN, unknown keys, bad sizes) is a Python exception naming it; nothing here aborts.
+// (shapes, NaN, absurd values, unknown keys, bad sizes) is a Python exception naming it; nothing
+// here aborts. One call at a time on a simulation (Simulation::Hold).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <csignal>
 #include <chrono>
+#include <atomic>
 #include <cmath>
 #include <condition_variable>
 #include <functional>
@@ -183,9 +185,83 @@ struct Range {
   uint32_t first = 0, count = 0;
 };
 
+// What the state's setters take: a coordinate within 1000 km of the origin and a velocity within
+// 1000 km/s on each axis. Far beyond any scene (a collider plane is drawn 200 m wide), and the
+// doubles still resolve a strut's length there (1e6 m holds 1e-10 m); 1e308 would overflow the
+// first force, and the run would step on with infinities until the monitor looks.
+constexpr double kMaxCoordinate = 1e6;  // [m]
+constexpr double kMaxVelocity = 1e6;    // [m/s]
+
+// The error of a call on a simulation that another call holds (Simulation::Hold).
+// `holder` and `call` as Python spells them: "run()", "sim.time".
+std::runtime_error busy(const char* holder, const char* call) {
+  return std::runtime_error("simulation busy: " + std::string(holder) + " is in progress on another thread (" + call +
+                            " refused: one call at a time on a simulation; wait for " + holder +
+                            " to return, or load a second simulation)");
+}
+
+// Who a setter sets, to name the body and the vertex in its errors: body `body` (its rows are its
+// own vertices) or, for -1, the whole state (rows are the model's vertices).
+struct Setter {
+  const Model& model;
+  long body;
+  const char* what;  // "positions" or "velocities"
+
+  std::string bodyName(uint32_t b) const { return "body " + std::to_string(b) + " '" + model.bodies[b].name + "'"; }
+  // "body 0 'ball': positions", "sim.positions".
+  std::string label() const {
+    return body == -1 ? std::string("sim.") + what : bodyName(static_cast<uint32_t>(body)) + ": " + what;
+  }
+  // Entry k of vertex g (a model index): "body 0 'ball': positions[7, 2]", or from the whole
+  // state's setter "sim.positions[150, 2] (body 1 'cube', vertex 4)".
+  std::string entry(uint32_t g, int k) const {
+    const uint32_t b = model.body[g];
+    const uint32_t local = g - model.bodies[b].firstVertex;
+    const std::string at = ", " + std::to_string(k) + "]";
+    if (body == -1) {
+      return "sim." + std::string(what) + "[" + std::to_string(g) + at + " (" + bodyName(b) + ", vertex " +
+             std::to_string(local) + ")";
+    }
+    return label() + "[" + std::to_string(local) + at;
+  }
+  // "body 0 'ball': positions: vertices 3 and 17", or "sim.positions: body 0 'ball', vertices 3 and 17".
+  std::string pair(uint32_t i, uint32_t j) const {
+    const uint32_t b = model.body[i], first = model.bodies[b].firstVertex;
+    const std::string vertices = "vertices " + std::to_string(i - first) + " and " + std::to_string(j - first);
+    return body == -1 ? label() + ": " + bodyName(b) + ", " + vertices : label() + ": " + vertices;
+  }
+};
+
 class Simulation {
  public:
   Simulation(const std::string& path, RunOptions options) : run_(path, std::move(options)) {}
+
+  // One call at a time on a simulation: run, step and check step it with the GIL released, and
+  // a call from another thread meanwhile would race with the step. Every call that steps, sets
+  // or draws the state holds it for its whole length (between run's frames too); another call
+  // on it meanwhile raises RuntimeError naming the call in progress (it does not wait: a Python
+  // thread that waited for a run() of minutes would look hung).
+  class Hold {
+   public:
+    Hold(const Simulation& s, const char* call) : s_(s) {
+      const char* none = nullptr;
+      if (!s.holder_.compare_exchange_strong(none, call)) throw busy(none, call);
+    }
+    ~Hold() { s_.holder_.store(nullptr); }
+    Hold(const Hold&) = delete;
+    Hold& operator=(const Hold&) = delete;
+
+   private:
+    const Simulation& s_;
+  };
+
+  // The state for a call that reads it (`call`: "measures", "time", ...); raises while another
+  // call holds the simulation. Nothing can take it between this check and the read: taking it
+  // needs the GIL, which the reader holds throughout.
+  const World& world(const char* call) const {
+    if (const char* holder = holder_.load()) throw busy(holder, call);
+    return run_.world();
+  }
 
   const Run& runner() const { return run_; }
   const World& world() const { return run_.world(); }
@@ -211,7 +287,8 @@ class Simulation {
   // Advances through every frame time up to `until`, then to `until` itself, as check does: a
   // frame at a time with the GIL released, Ctrl-C looked for between frames.
   void run(double until) {
-    enter();
+    Hold hold(*this, "run()");
+    refuseFailed();
     if (!std::isfinite(until)) throw py::value_error("run(until=...): the time must be finite");
     const World& w = world();
     if (until < w.time() - 0.5 * w.dt()) {
@@ -234,7 +311,8 @@ class Simulation {
   // n steps (the adaptive step: n accepted steps), then the monitor's check unless `check` is
   // false (a caller that checks itself, or measures the call's cost).
   void step(long n, bool check) {
-    enter();
+    Hold hold(*this, "step()");
+    refuseFailed();
     if (n < 0) throw py::value_error("step(n=" + std::to_string(n) + "): n must be 0 or more");
     constexpr long kChunk = 4096;  // steps between looks for Ctrl-C
     for (long done = 0; done < n;) {
@@ -250,38 +328,51 @@ class Simulation {
   // same fields as `check --json`). A failure of the monitor raises Unstable (with the record); a
   // criterion (min_volume, end_volume, end_at_rest) that fails gives status "failed". A scene
   // that gives no step, run from its start, tries longer steps as check does (Run::complete).
-  std::string check(std::optional<double> minVolume, std::optional<double> endVolume, std::optional<bool> endAtRest) {
-    enter();
-    try {
-      run_.setCriteria(minVolume, endVolume, endAtRest);
-    } catch (const Error& e) {
-      throw py::value_error(std::string("check(): ") + e.what());
+  // The criteria come as load()'s keywords do, as text through the run options' table
+  // (run/options.h), so a bad one raises springy.Error with the command line's words.
+  std::string check(const std::map<std::string, std::string>& criteria) {
+    Hold hold(*this, "check()");
+    refuseFailed();
+    RunOptions given;
+    for (const auto& [name, text] : criteria) {
+      const RunOption* row = findRunOption(name);
+      if (!row || row->name != name || row->group != RunOption::Group::Criteria) {
+        throw py::type_error("check(): '" + name + "' is not one of check's criteria");
+      }
+      setRunOption(given, name, text);
     }
+    const auto has = [&](const char* name) { return criteria.count(name) != 0; };
+    run_.setCriteria(has("min_volume") ? std::optional<double>(given.minVolume) : std::nullopt,
+                     has("end_volume") ? std::optional<double>(given.endVolume) : std::nullopt,
+                     has("end_at_rest") ? std::optional<bool>(given.endAtRest) : std::nullopt);
     const std::optional<Failure> failure = released([&] { return run_.complete(); });
     checkSignals();
     if (failure && !failure->criterion) fail(toJson(run_.record()).dump());
     return toJson(run_.record()).dump();
   }
 
-  // Replaces the positions or the velocities of a range (checked: shape and finiteness). The
+  // Replaces the positions or the velocities of a range, checked (shape, type, every value finite
+  // and in bounds, no strut's ends on one point; the error names the body and the vertex). The
   // integrator's caches and the contact history start again, and so does the monitor's watch
-  // (energy put in by hand is no instability).
+  // (energy put in by hand is no instability); a failure is forgotten: stepping goes on from here.
   void setRows(py::handle value, long body, bool positions) {
-    enter(false);
-    const char* what = positions ? "positions" : "velocities";
+    Hold hold(*this, positions ? "setting positions" : "setting velocities");
+    const Setter to{world().model(), body, positions ? "positions" : "velocities"};
     const Range r = range(body);
-    const std::string name = (body == -1 ? std::string("sim.") : "body " + std::to_string(body) + ": ") + what;
-    const auto rows = checkedRows(value, name, r.count);
+    const auto rows = checkedRows(value, to.label(), r.count);
     const auto in = rows.unchecked<2>();
     std::vector<Vec3> x = world().positions(), v = world().velocities();
     std::vector<Vec3>& target = positions ? x : v;
     for (uint32_t i = 0; i < r.count; ++i) target[r.first + i] = Vec3(in(i, 0), in(i, 1), in(i, 2));
+    if (positions) checkBounds(x, r, to, kMaxCoordinate, "a coordinate must be within 1e6 m of the origin");
+    if (!positions) checkBounds(v, r, to, kMaxVelocity, "a velocity must be within 1e6 m/s on each axis");
+    if (positions) checkStruts(x, r, to);
     run_.setState(std::move(x), std::move(v));
   }
 
   // The frame at this instant as `springy frames` draws it: HxWx3 uint8, rows top-down.
   py::array render(std::optional<int> width, std::optional<int> height, bool overlay, bool shadows, bool antialias) {
-    enter(false);
+    Hold hold(*this, "render()");
     RenderOverrides o;
     o.width = width;
     o.height = height;
@@ -331,34 +422,46 @@ class Simulation {
     }
     const auto rows = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(given);
     if (!rows) throw py::error_already_set();
-    const auto in = rows.unchecked<2>();
-    for (py::ssize_t i = 0; i < in.shape(0); ++i) {
-      for (py::ssize_t k = 0; k < 3; ++k) {
-        if (!std::isfinite(in(i, k))) {
-          throw py::value_error(name + "[" + std::to_string(i) + ", " + std::to_string(k) + "] is " +
-                                exactNumber(in(i, k)) + ": every value must be finite");
-        }
-      }
-    }
     return rows;
   }
 
-  // Every call that reads or changes the state starts here. Stepping a simulation that failed
-  // raises its failure again (`stepping`): its state is what the monitor refused (set the state,
-  // or load the scene again). While one thread steps it (the GIL released), no other may touch it.
-  void enter(bool stepping = true) const {
-    if (busy_) throw py::value_error("the simulation is being stepped on another thread; wait for that call to return");
-    if (stepping && run_.failure()) raise(*run_.failure(), world());
+  // Every value of vertices r of `rows` finite and within `bound` (`rule` says so); checked in the
+  // state's vectors, where each entry's vertex names its body.
+  static void checkBounds(const std::vector<Vec3>& rows, Range r, const Setter& to, double bound, const char* rule) {
+    for (uint32_t i = r.first; i < r.first + r.count; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        const double value = rows[i][k];
+        if (!std::isfinite(value)) {
+          throw py::value_error(to.entry(i, k) + " is " + exactNumber(value) + ": every value must be finite");
+        }
+        if (std::abs(value) > bound) {
+          throw py::value_error(to.entry(i, k) + " is " + exactNumber(value) + ": " + rule);
+        }
+      }
+    }
   }
 
-  // Runs fn with the GIL released, the simulation marked busy.
+  // No strut among vertices r with both ends on one point: it would have no direction and push
+  // nothing apart (sim/strut.cpp skips it), so a body set onto a point (all zeros) would stay one.
+  static void checkStruts(const std::vector<Vec3>& x, Range r, const Setter& to) {
+    for (const Strut& strut : to.model.struts) {
+      if (strut.i < r.first || strut.i - r.first >= r.count || length(x[strut.j] - x[strut.i]) > 0.0) continue;
+      const Vec3& p = x[strut.i];
+      throw py::value_error(to.pair(strut.i, strut.j) + ", joined by a strut, are both at (" + exactNumber(p.x) + ", " +
+                            exactNumber(p.y) + ", " + exactNumber(p.z) +
+                            "): a strut's ends must be apart (a body cannot be set onto a point)");
+    }
+  }
+
+  // Stepping a simulation that failed raises its failure again: its state is what the monitor
+  // refused. Setting the state (setRows) forgets the failure; so does loading the scene again.
+  void refuseFailed() const {
+    if (run_.failure()) raise(*run_.failure(), world());
+  }
+
+  // Runs fn with the GIL released (the caller holds the simulation: Hold).
   template <class F>
-  std::invoke_result_t<F&> released(F&& fn) {
-    struct Busy {
-      bool& flag;
-      explicit Busy(bool& f) : flag(f) { flag = true; }
-      ~Busy() { flag = false; }
-    } busy(busy_);
+  static std::invoke_result_t<F&> released(F&& fn) {
     py::gil_scoped_release release;
     return fn();
   }
@@ -378,7 +481,10 @@ class Simulation {
   }
 
   Run run_;
-  bool busy_ = false;     // a call is stepping it with the GIL released
+  // The call that holds the simulation ("run", "step", ...), or null (Hold). Taken and given back
+  // with the GIL held; atomic since the stepping thread reads nothing of it without the GIL, but
+  // cheap enough to leave no doubt.
+  mutable std::atomic<const char*> holder_{nullptr};
   SceneDesc viewScene_;   // the scene as drawn (its [render] with the overrides)
   std::unique_ptr<SceneView> view_;
   std::tuple<std::optional<int>, std::optional<int>, bool, bool, bool, int> viewKey_;  // render()'s arguments
@@ -389,7 +495,9 @@ enum class Rows { Positions, Velocities, Rest };
 py::array bodyRows(py::object self, long body, Rows which) {
   const Simulation& s = self.cast<const Simulation&>();
   const Range r = s.range(body);
-  const World& w = s.world();
+  const World& w = s.world(which == Rows::Positions    ? "positions"
+                           : which == Rows::Velocities ? "velocities"
+                                                       : "rest_positions");
   const std::vector<Vec3>& rows = which == Rows::Positions    ? w.positions()
                                   : which == Rows::Velocities ? w.velocities()
                                                               : w.model().restPosition;
@@ -469,27 +577,39 @@ void defineSimulationRuns(py::class_<Simulation>& cls) {
           py::arg("path"), py::arg("sets"), py::arg("options"), py::arg("quiet"))
       .def("run", &Simulation::run, py::arg("until"))
       .def("step", &Simulation::step, py::arg("n") = 1, py::arg("check") = true)
-      .def("check", &Simulation::check, py::arg("min_volume") = py::none(), py::arg("end_volume") = py::none(),
-           py::arg("end_at_rest") = py::none())
+      .def("check", &Simulation::check, py::arg("criteria"))
       .def("render", &Simulation::render, py::arg("width"), py::arg("height"), py::arg("overlay"),
            py::arg("shadows"), py::arg("antialias"));
 }
 
 // Simulation's read-only properties: its clock, its settings and its state's hash.
 void defineSimulationProperties(py::class_<Simulation>& cls) {
-  cls.def_property_readonly("time", [](const Simulation& s) { return s.world().time(); })
-      .def_property_readonly("dt", [](const Simulation& s) { return s.world().dt(); })
-      .def_property_readonly("steps", [](const Simulation& s) { return s.world().stepCount(); })
-      .def_property_readonly("force_evaluations", [](const Simulation& s) { return s.world().forceEvaluations(); })
+  // What the steps change is read through world(name): refused while another call holds the
+  // simulation. The scene's name, duration, fps, threads and bodies never change.
+  cls.def_property_readonly("time", [](const Simulation& s) { return s.world("sim.time").time(); })
+      .def_property_readonly("dt", [](const Simulation& s) { return s.world("sim.dt").dt(); })
+      .def_property_readonly("steps", [](const Simulation& s) { return s.world("sim.steps").stepCount(); })
+      .def_property_readonly("force_evaluations",
+                             [](const Simulation& s) { return s.world("sim.force_evaluations").forceEvaluations(); })
       .def_property_readonly("integrator",
-                             [](const Simulation& s) { return std::string(integratorName(s.world().integrator())); })
-      .def_property_readonly("substeps", [](const Simulation& s) { return s.scene().substeps; })
+                             [](const Simulation& s) {
+                               return std::string(integratorName(s.world("sim.integrator").integrator()));
+                             })
+      .def_property_readonly("substeps",
+                             [](const Simulation& s) {
+                               s.world("sim.substeps");  // check() may choose more
+                               return s.scene().substeps;
+                             })
       .def_property_readonly("duration", [](const Simulation& s) { return s.scene().duration; })
       .def_property_readonly("fps", [](const Simulation& s) { return s.scene().view.render.fps; })
       .def_property_readonly("threads", [](const Simulation& s) { return s.world().threads(); })
       .def_property_readonly("name", [](const Simulation& s) { return s.scene().name; })
-      .def_property_readonly("step_untried", [](const Simulation& s) { return s.runner().untried(); })
-      .def_property_readonly("state_hash", [](const Simulation& s) { return stateHash(s.world()); })
+      .def_property_readonly("step_untried",
+                             [](const Simulation& s) {
+                               s.world("sim.step_untried");
+                               return s.runner().untried();
+                             })
+      .def_property_readonly("state_hash", [](const Simulation& s) { return stateHash(s.world("sim.state_hash")); })
       .def_property_readonly("body_count", [](const Simulation& s) { return s.world().model().bodies.size(); });
 }
 
@@ -552,8 +672,9 @@ void defineSimulationBodies(py::class_<Simulation>& cls) {
            })
       .def("measures", [](const Simulation& s, long body) {
         s.body(body);
-        py::dict d = measuresDict(measureBody(s.world(), static_cast<uint32_t>(body)));
-        d["contacts"] = touchingVertices(s.world(), static_cast<uint32_t>(body));
+        const World& world = s.world("measures()");
+        py::dict d = measuresDict(measureBody(world, static_cast<uint32_t>(body)));
+        d["contacts"] = touchingVertices(world, static_cast<uint32_t>(body));
         return d;
       });
 }
@@ -604,14 +725,15 @@ void defineCommands(py::module_& m) {
   m.def(
       "study",
       [](const std::string& kind, const std::string& output, const std::vector<std::string>& scenes, bool quick,
-         int repeats, double maxDuration) {
+         const std::string& repeats, std::optional<std::string> maxDuration) {
+        // KIND, --repeats and --max-duration from their text, as the command line reads them (run/options.h).
         StudyOptions o;
-        o.kind = kind;
+        o.kind = studyKind(kind);
         o.output = output;
         o.scenes = scenes;
         o.quick = quick;
-        o.repeats = repeats;
-        o.maxDuration = maxDuration;
+        o.repeats = studyRepeats(repeats);
+        if (maxDuration) o.maxDuration = studyMaxDuration(*maxDuration);
         runCommand("springy study " + kind, [&] { return runStudy(o); });
       },
       py::arg("kind"), py::arg("output"), py::arg("scenes"), py::arg("quick"), py::arg("repeats"),

@@ -159,4 +159,30 @@ void checkRunOptions(const RunOptions& o) {
 
 unsigned threadCount(const RunOptions& options) { return options.threads ? *options.threads : defaultThreadCount(); }
 
+std::string studyKind(const std::string& text) {
+  std::string kinds;
+  for (const char* kind : {"accuracy", "contact", "stability"}) {
+    if (text == kind) return text;
+    kinds += (kinds.empty() ? "" : ", ") + std::string(kind);
+  }
+  throw Error("study: '" + text + "' is not a study; the studies are: " + kinds);
+}
+
+int studyRepeats(const std::string& text) {
+  const long repeats = whole("--repeats", text);
+  if (repeats < 1 || repeats > kMaxStudyRepeats) {
+    throw Error("--repeats must be between 1 and " + std::to_string(kMaxStudyRepeats) + " (timed runs per point)");
+  }
+  return static_cast<int>(repeats);
+}
+
+double studyMaxDuration(const std::string& text) {
+  // The words of --duration's check: nan and inf are no durations (CLI11's PositiveNumber let nan through).
+  const double seconds = number("--max-duration", text);
+  if (!(seconds > 0.0) || !std::isfinite(seconds)) {
+    throw Error("--max-duration must be a positive finite number of seconds");
+  }
+  return seconds;
+}
+
 }  // namespace springy

@@ -70,4 +70,12 @@ constexpr unsigned kMaxThreads = 256;
 // The simulation threads the options ask for: --threads, else defaultThreadCount().
 unsigned threadCount(const RunOptions& options);
 
+// springy study's own options, read from their text by the command line (app/cli.cpp) and by
+// Python's springy.study() alike, so that both refuse the same values with the same words. Each
+// throws springy::Error naming the option and what it takes.
+constexpr int kMaxStudyRepeats = 1000;
+std::string studyKind(const std::string& text);      // KIND: accuracy, contact or stability
+int studyRepeats(const std::string& text);           // --repeats N: 1 to kMaxStudyRepeats
+double studyMaxDuration(const std::string& text);    // --max-duration SECONDS: positive and finite
+
 }  // namespace springy

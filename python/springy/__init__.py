@@ -161,8 +161,11 @@ class Simulation:
         self.bodies = [Body(self, i) for i in range(core.body_count)]
 
     def __repr__(self):
-        return (f"<springy.Simulation '{self.name}': {len(self.bodies)} bodies, t = {self.time:g} s, "
-                f"{self.integrator}>")
+        try:
+            now = f"t = {self.time:g} s, {self.integrator}"
+        except RuntimeError:  # another thread's call holds it (docs/python.md): no clock to read
+            now = "busy"
+        return f"<springy.Simulation '{self.name}': {len(self.bodies)} bodies, {now}>"
 
     # The state and the clock.
     time = property(lambda self: self._core.time, doc="simulated time [s]")
@@ -221,9 +224,8 @@ class Simulation:
         max_strain, max_penetration, volume_min, volume_end, kinetic, gravitational, elastic,
         at_rest). The criteria default to load()'s; a failed one gives status "failed"; an
         instability raises Unstable."""
-        return _json.loads(self._core.check(None if min_volume is None else float(min_volume),
-                                            None if end_volume is None else float(end_volume),
-                                            None if end_at_rest is None else bool(end_at_rest)))
+        criteria = _options({"min_volume": min_volume, "end_volume": end_volume, "end_at_rest": end_at_rest})
+        return _json.loads(self._core.check(criteria))
 
     def render(self, width=None, height=None, overlay=True, shadows=True, antialias=True):
         """The scene at this instant as `springy frames` draws it: an (H, W, 3) uint8 array.
@@ -287,10 +289,12 @@ def load_study(directory):
     return tables
 
 
-def study(kind, output="study", scenes=(), quick=False, repeats=3, max_duration=0.0):
+def study(kind, output="study", scenes=(), quick=False, repeats=3, max_duration=None):
     """`springy study KIND -o OUTPUT` (accuracy, contact or stability), then its tables as
-    load_study(OUTPUT) reads them."""
-    _springy.study(kind, _os.fspath(output), _paths(scenes), bool(quick), int(repeats), float(max_duration))
+    load_study(OUTPUT) reads them. repeats and max_duration are --repeats and --max-duration
+    (None: the whole of each scene), checked as the command line checks them."""
+    _springy.study(kind, _os.fspath(output), _paths(scenes), bool(quick), _option_text("repeats", repeats),
+                   None if max_duration is None else _option_text("max_duration", max_duration))
     return load_study(output)
 
 

@@ -234,7 +234,9 @@ struct Setter {
 
 class Simulation {
  public:
-  Simulation(const std::string& path, RunOptions options) : run_(path, std::move(options)) {}
+  // The views (rowsView) point into the world's buffers: a check() that starts over keeps the
+  // world it replaces, so a view taken before stays readable (Run::keepReplacedWorlds).
+  Simulation(const std::string& path, RunOptions options) : run_(path, std::move(options)) { run_.keepReplacedWorlds(); }
 
   // One call at a time on a simulation: run, step and check step it with the GIL released, and
   // a call from another thread meanwhile would race with the step. Every call that steps, sets

@@ -22,6 +22,7 @@ Run::Run(std::string path, RunOptions options, const std::function<void(SceneDes
 }
 
 void Run::restart() {
+  if (keepReplaced_ && world_) replaced_.push_back(std::move(*world_));
   world_.reset();  // its threads and buffers go before the new ones come
   world_.emplace(makeWorld(scene_, options_));
   MonitorLimits limits;

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <chrono>
+#include <deque>
 #include <functional>
 #include <optional>
 #include <string>
@@ -110,6 +111,13 @@ class Run {
   // The run's record, as `check --json` writes it: status, the failure, every body's result.
   SceneRecord record() const;
 
+  // A retry (retry()) starts a new world; with this set, the worlds it replaces are kept (with
+  // their buffers) until the run goes, instead of freed first: Python's zero-copy state views
+  // point into a world's buffers, and one taken before check() started over must not point at
+  // freed memory (it shows the state the old world had). Costs a world per retry, so only the
+  // module asks for it.
+  void keepReplacedWorlds() { keepReplaced_ = true; }
+
  private:
   void restart();  // a new world at t = 0, at the scene's step
   const std::optional<Failure>& fail(std::optional<Failure> failure);
@@ -121,6 +129,8 @@ class Run {
   double frameTime_ = 0.0;
   long frames_ = 0;
   std::optional<World> world_;
+  bool keepReplaced_ = false;
+  std::deque<World> replaced_;  // keepReplacedWorlds(): the worlds a retry replaced
   std::optional<Monitor> monitor_;
   RestWatch rest_;
   long frame_ = 0;

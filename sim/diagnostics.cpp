@@ -169,9 +169,9 @@ namespace {
 constexpr double kFasterThanTheBody = 4.0;
 constexpr double kSagOfSize = 0.5;
 
-std::string number(double x) {
+std::string number(double x, bool allDigits = false) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", x);
+  std::snprintf(buf, sizeof buf, allDigits ? "%.17g" : "%.4g", x);
   return buf;
 }
 
@@ -196,8 +196,10 @@ MotionSpeed topSpeed(const Movement& motion, double t0, double t1, const Vec3& a
     if (b.time < t0 || a.time > t1) continue;
     const double distance = length(b.offset - a.offset), span = b.time - a.time;
     // A cubic segment's speed peaks at about 1.5 times its chord's (zero tangents at its ends).
+    // Times so close that four digits do not tell them apart get all of theirs.
+    const bool close = number(a.time) == number(b.time);
     consider(distance / span * (motion.cubic ? 1.5 : 1.0),
-             "its keyframes at t = " + number(a.time) + " s and " + number(b.time) + " s move it " +
+             "its keyframes at t = " + number(a.time, close) + " s and " + number(b.time, close) + " s move it " +
                  number(distance) + " m in " + number(span) + " s");
   }
   if (motion.frequency > 0.0) {

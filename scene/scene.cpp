@@ -1025,8 +1025,9 @@ void readCamera(const toml::table& table, const std::string& path, CameraDesc& c
   camera.angles = cr.optionalVec3("angles");
   if (camera.target && camera.angles) cr.failHere("give either target or angles, not both");
   if (camera.position && camera.target && *camera.position == *camera.target) {
-    cr.fail(*table.get("target"), "target", "is the camera's position " + tomlText(*table.get("position")) +
-                                                ": the camera has no direction to look in; move one of them");
+    cr.fail(*table.get("target"), "target",
+            "position and target are the same point " + tomlText(*table.get("position")) +
+                ": the camera has no direction to look in; move one of them");
   }
   camera.fov = cr.inRange("fov", camera.fov, 1.0, 170.0);
   cr.finish();

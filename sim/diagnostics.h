@@ -46,11 +46,11 @@ BodyResponse bodyResponse(const Model& model, uint32_t body);
 
 // What the scene drives `body` with, over the time from `since` to the world's time, that no step
 // can follow, or "" when nothing stands out (then the step may be at fault): gravity that would
-// sag the body by more than half its size ("gravity 1e+06 m/s^2 (it would sag the body by 125 m
+// sag the body by more than ten times its size ("gravity 1e+06 m/s^2 (it would sag the body by 125 m
 // under its own weight, 7.4 times its size)"), or a moving collider or the body's pins faster than
 // its waves run ("collider 'plate' moving at 1000 m/s (its keyframes at t = 0.3 s and 0.3015 s
-// move it 1.5 m in 0.0015 s), more than the 7.5 m/s at which the body can give way"). A driver
-// moving several times faster than the body answers crushes it or tears through it whatever the
+// move it 1.5 m in 0.0015 s), more than the 18.82 m/s at which the body can give way"), over ten
+// times. A driver much faster than the body answers crushes it or tears through it whatever the
 // step: a failure with such a cause is the scene's (Failure::cause, sim/monitor.h).
 std::string sceneCause(const World& world, uint32_t body, double since);
 

@@ -122,13 +122,19 @@ bool collapsed(const BodyInfo& info, double volume, double before) {
   return info.restVolume > 0.0 && !(volume > kCollapsedVolume * std::max(info.restVolume, before));
 }
 
-// The failure of a closed body whose volume collapsed (collapsed()): NaN, inside out, crushed
-// flat or folded.
+// The failure of a closed body whose volume collapsed (collapsed()): NaN, blown up through
+// itself, inside out, crushed flat or folded.
 Failure collapseFailure(const World& world, uint32_t b, double volume, double before, double since) {
   const BodyInfo& info = world.model().bodies[b];
   if (!std::isfinite(volume)) return failed(world, b, "a position or velocity is NaN or infinite", stepAdvice(info), since);
   const double ratio = volume / info.restVolume;
   std::ostringstream s;
+  if (ratio < -0.5) {
+    // Through itself to more than half its size inside out: no crush does that, an instability
+    // does (an explicit step far past its limit, a gas whose period the step does not resolve).
+    s << "it blew up: it turned inside out to " << 100.0 * ratio << "% of its rest volume";
+    return failed(world, b, s.str(), stepAdvice(info), since);
+  }
   if (volume < 0.0) {
     s << "it turned inside out: its volume is " << 100.0 * ratio << "% of rest";
   } else if (ratio < 1e-9) {

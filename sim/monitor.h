@@ -43,8 +43,8 @@ struct Failure {
 };
 
 // A closed body whose volume falls to this share of its rest volume (or of its volume at the last
-// frame) has collapsed: crushed flat, folded through itself or inside out. No scene keeps a body
-// this flat: the lowest of scenes/ is 0.81 (press.toml).
+// frame) has collapsed: crushed flat, folded through itself or inside out. Far below what a body
+// that keeps its shape comes to (scenes/press.toml's ball, squeezed to half its height, keeps 81%).
 constexpr double kCollapsedVolume = 0.01;
 
 // Per-body running extremes, for reports.

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "app/bounded_queue.h"
 #include "app/progress.h"
 #include "render/error.h"
+#include "sim/error.h"
 
 namespace springy {
 namespace {
@@ -50,12 +52,29 @@ struct Closer {
 
 }  // namespace
 
+namespace {
+
+// SPRINGY_X264_THREADS: a whole number from 0 (the codec's default) to x264's most, 128
+// (X264_THREAD_MAX); anything else is refused, never passed on for the codec to clamp or ignore.
+int x264ThreadsOf(const std::string& text) {
+  const bool digits = !text.empty() && text.size() <= 3 &&
+                      std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+  if (!digits || std::stoi(text) > 128) {
+    throw Error("SPRINGY_X264_THREADS='" + text +
+                "': must be a whole number of encoder threads from 0 (x264's default: every core) to 128; unset it "
+                "for springy's choice");
+  }
+  return std::stoi(text);
+}
+
+}  // namespace
+
 RenderEnvironment RenderEnvironment::read() {
   RenderEnvironment env;
   env.serial = envFlag("SPRINGY_RENDER_SERIAL");
   env.profilePasses = envFlag("SPRINGY_RENDER_PROFILE");
   if (const char* aa = std::getenv("SPRINGY_RENDER_AA"); aa && std::string(aa) == "msaa") env.msaa = true;
-  if (const char* t = std::getenv("SPRINGY_X264_THREADS")) env.x264Threads = std::atoi(t);
+  if (const char* t = std::getenv("SPRINGY_X264_THREADS")) env.x264Threads = x264ThreadsOf(t);
   return env;
 }
 

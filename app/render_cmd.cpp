@@ -355,13 +355,14 @@ int framesOne(const std::string& path, const FramesOptions& options) {
 
 int runRender(const RenderOptions& options) {
   std::vector<std::string> outputs;
+  RenderEnvironment env;
   try {
     outputs = videoOutputs(options);
+    env = RenderEnvironment::read();
   } catch (const std::exception& e) {
     std::cerr << "springy render: " << e.what() << "\n";
     return 1;
   }
-  const RenderEnvironment env = RenderEnvironment::read();
   int status = 0;
   for (std::size_t i = 0; i < options.scenes.size(); ++i) {
     const std::string& path = options.scenes[i];

@@ -163,7 +163,8 @@ struct VideoEncoder::Impl {
     codec->framerate = rate;
     codec->pix_fmt = AV_PIX_FMT_YUV420P;
     codec->gop_size = std::max(1, static_cast<int>(std::lround(s.fps * 2.0)));
-    codec->thread_count = std::max(0, s.threads);
+    if (s.threads < 0) throw RenderError("VideoEncoder '" + path + "': " + std::to_string(s.threads) + " threads");
+    codec->thread_count = s.threads;
     codec->color_primaries = AVCOL_PRI_BT709;
     codec->color_trc = AVCOL_TRC_BT709;
     codec->colorspace = AVCOL_SPC_BT709;

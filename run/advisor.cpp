@@ -271,6 +271,11 @@ bool retryDefaultStep(const std::string& path, SceneDesc& scene, const Failure& 
                       unsigned threads, std::ostream& log) {
   if (!untried || failure.criterion) return false;
   untried = false;
+  // What the scene did to the body (Failure::cause) is no step's to fix: said at once, rather
+  // than tried at ever more substeps.
+  if (!failure.cause.empty()) {
+    throw Error(path + ": the default step was not tried further: " + failure.message);
+  }
   char after[64];
   std::snprintf(after, sizeof after, "after t = %.3g s", failure.time);
   const int failed = scene.substeps;

@@ -108,12 +108,15 @@ std::optional<Failure> Run::runUntil(double time) {
 std::optional<Failure> Run::step(long count, bool check) {
   if (failure_) return failure_;
   pristine_ = false;
-  for (long i = 0; i < count && world_->stepProblem().empty() && !interrupted(); ++i) {
+  const double since = monitor_->since();
+  for (long i = 0; i < count && world_->stepProblem().empty() && !monitor_->watched() && !interrupted(); ++i) {
     world_->stepToward(std::numeric_limits<double>::infinity());
+    if (world_->stepProblem().empty()) monitor_->watchStep(*world_);  // every step, as stepTo
   }
+  if (monitor_->watched()) return fail(monitor_->watched());
   if (!world_->stepProblem().empty()) {
     std::optional<Failure> seen = monitor_->check(*world_);  // a blow-up it sees says more
-    return fail(seen ? seen : Failure{0, world_->stepCount(), world_->time(), world_->stepProblem()});
+    return fail(seen ? seen : stepFailure(*world_, since));
   }
   while (world_->reached(static_cast<double>(frame_ + 1) * frameTime_)) ++frame_;
   if (check) fail(monitor_->check(*world_));

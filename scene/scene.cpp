@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <optional>
@@ -23,6 +24,25 @@ namespace {
 
 std::string location(const std::string& path, const toml::source_region& r) {
   return path + ":" + std::to_string(r.begin.line) + ":" + std::to_string(r.begin.column);
+}
+
+// A value as TOML writes it ([1, 0, 1], 0.5), for messages that quote a key.
+std::string tomlText(const toml::node& node) {
+  std::ostringstream text;
+  if (const toml::array* a = node.as_array()) {
+    text << "[";
+    for (std::size_t i = 0; i < a->size(); ++i) text << (i ? ", " : "") << tomlText(*a->get(i));
+    text << "]";
+  } else if (const auto* d = node.as_floating_point()) {
+    text << d->get();
+  } else if (const auto* n = node.as_integer()) {
+    text << n->get();
+  } else if (const auto* str = node.as_string()) {
+    text << '"' << str->get() << '"';
+  } else {
+    text << "...";
+  }
+  return text.str();
 }
 
 // Reads the keys of one table, remembering which were read, so that finish() can reject the
@@ -532,10 +552,57 @@ TriMesh readShape(Reader& r, const std::string& shape, const std::string& path, 
   return mesh;
 }
 
+// The first triangle of `x` with no area, as the model sees it (sim/model.cpp checkTriangles: the
+// cross product at most 1e-12 of the square of the mesh's size), or -1. Triangles that refer to
+// no vertex are left to the model, which names them.
+long firstFlatTriangle(const std::vector<Triangle>& triangles, const std::vector<Vec3>& x) {
+  const double size = length(boundsOf(x).size());
+  for (std::size_t f = 0; f < triangles.size(); ++f) {
+    const Triangle& t = triangles[f];
+    if (t[0] >= x.size() || t[1] >= x.size() || t[2] >= x.size()) continue;
+    if (!(length(cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]])) > 1e-12 * size * size)) return static_cast<long>(f);
+  }
+  return -1;
+}
+
+// Step of placeMesh: a triangle that the placement flattens is refused at the key that flattened
+// it, found by applying the placement a part at a time (the shape's own size, then scale,
+// rotation, position: a far position leaves too few digits for the body's size).
+void refuseFlatTriangles(Reader& r, const TriMesh& mesh, const Transform& transform) {
+  Transform partial;
+  partial.scale = {1, 1, 1};
+  const std::array<std::pair<const char*, std::function<void()>>, 4> steps{{
+      {"", [] {}},
+      {"scale", [&] { partial.scale = transform.scale; }},
+      {"rotation", [&] { partial.rotation = transform.rotation; }},
+      {"position", [&] { partial.position = transform.position; }},
+  }};
+  std::vector<Vec3> x(mesh.positions.size());
+  for (const auto& [key, take] : steps) {
+    take();
+    for (std::size_t i = 0; i < x.size(); ++i) x[i] = partial.apply(mesh.positions[i]);
+    const long f = firstFlatTriangle(mesh.triangles, x);
+    if (f < 0) continue;
+    const Triangle& t = mesh.triangles[static_cast<std::size_t>(f)];
+    // The shape's own size (radius, size, height), or the mesh file, made it flat.
+    std::string at = key;
+    for (const char* shapeKey : {"radius", "size", "height", "mesh"}) {
+      if (at.empty() && r.has(shapeKey)) at = shapeKey;
+    }
+    if (at.empty()) return;  // the shape's defaults: the model names the triangle
+    const toml::node& node = *r.get(at);
+    std::ostringstream text;
+    text << at << " = " << tomlText(node) << " at line " << node.source().begin.line << " flattens the mesh: triangle " << f
+         << " (vertices " << t[0] << ", " << t[1] << ", " << t[2] << ") has zero area";
+    r.fail(node, at, text.str());
+  }
+}
+
 // Step: the mesh placed in the scene (scale, rotation, position), and the drawn mesh of a proxy
 // with it, bound to the proxy's surface.
 void placeMesh(Reader& r, TriMesh mesh, BodyDesc& b) {
   const Transform transform = readTransform(r);
+  refuseFlatTriangles(r, mesh, transform);
   for (Vec3& p : mesh.positions) p = transform.apply(p);
   b.mesh = std::move(mesh);
   if (!b.drawMesh.positions.empty()) {
@@ -797,6 +864,11 @@ TriangleCollider readTriangleCollider(const toml::table& table, const std::strin
       m.triangles.push_back(tri);
     }
   }
+  if (!r.has("vertices") && r.has("indices")) {
+    const toml::node* n = r.get("indices");
+    r.fail(*n, "indices", "needs vertices = [[x, y, z], ...] too: indices number the vertices, and a mesh given "
+                          "in the scene needs both");
+  }
   // quads = [[a, b, c, d], ...]: each a flat quadrilateral plate of four corners.
   if (const toml::node* n = r.get("quads")) {
     const auto* a = n->as_array();
@@ -953,6 +1025,11 @@ void readCamera(const toml::table& table, const std::string& path, CameraDesc& c
   camera.target = cr.optionalVec3("target");
   camera.angles = cr.optionalVec3("angles");
   if (camera.target && camera.angles) cr.failHere("give either target or angles, not both");
+  if (camera.position && camera.target && *camera.position == *camera.target) {
+    cr.fail(*table.get("target"), "target",
+            "position and target are the same point " + tomlText(*table.get("position")) +
+                ": the camera has no direction to look in; move one of them");
+  }
   camera.fov = cr.inRange("fov", camera.fov, 1.0, 170.0);
   cr.finish();
 }
@@ -986,6 +1063,28 @@ void readRender(const toml::table& table, const std::string& path, RenderDesc& r
   if (const toml::table* c = r.subtable("camera")) readCamera(*c, path, rd.camera);
   if (const toml::table* l = r.subtable("light")) readLight(*l, path, rd);
   r.finish();
+}
+
+// Step: every body and [[triangles]] collider has a name of its own: [[attach]] and the messages
+// find them by name, and two of one name would leave it to chance which is meant. Said at the
+// second, naming where the first is. ([[plane]] and [[prop]] take no name.)
+void refuseSharedNames(const toml::table& root, const std::string& path, const SceneDesc& scene) {
+  std::vector<std::pair<std::string, std::string>> seen;  // (name, where it is given)
+  const auto add = [&](const char* kind, std::size_t i, const std::string& name) {
+    const toml::table& table = *root.get(kind)->as_array()->get(i)->as_table();
+    const toml::node* n = table.get("name");
+    const std::string where =
+        location(path, n ? n->source() : table.source()) + ": [[" + kind + "]] #" + std::to_string(i + 1);
+    for (const auto& [other, at] : seen) {
+      if (other != name) continue;
+      throw Error(where + ": the name '" + name + "' is taken by " + at +
+                  "; bodies and [[triangles]] colliders need names of their own (an [[attach]] names what it "
+                  "holds)");
+    }
+    seen.emplace_back(name, where);
+  };
+  for (std::size_t i = 0; i < scene.bodies.size(); ++i) add("body", i, scene.bodies[i].name);
+  for (std::size_t i = 0; i < scene.triangleColliders.size(); ++i) add("triangles", i, scene.triangleColliders[i].name);
 }
 
 }  // namespace
@@ -1106,6 +1205,7 @@ SceneDesc parseScene(const std::string& text, const std::string& path) {
       scene.view.triangleColliders.push_back(look);
     }
   }
+  refuseSharedNames(root, path, scene);
   if (const toml::array* attach = arrayOfTables(root, "attach", path)) {
     top.get("attach");
     for (std::size_t i = 0; i < attach->size(); ++i) {

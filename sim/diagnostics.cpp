@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "sim/forces.h"
@@ -155,6 +157,157 @@ BodyMeasures measureBody(const World& world, uint32_t body, const Vec3* x, const
     }
   });
   return combineRegions(info, sums, chunkSum);
+}
+
+namespace {
+
+// A driver this many times faster than the body's waves, or gravity that would sag it by this
+// share of its size, is more than the body can follow at any step (sceneCause). Far from what
+// the scenes do: the fastest driver of scenes/ is cape.toml's pins, at 0.1 of its cloth's speed
+// (press.toml's plate 0.014, shaker.toml's 0.017); the largest sag is cube.toml's, 1.6% of its
+// size.
+// The estimates count struts only: a gas holds a body its struts alone would not
+// (tests/data/app/gas.toml's balloon, whose struts would sag it by 1.2 times its size).
+constexpr double kFasterThanTheBody = 10.0;
+constexpr double kSagOfSize = 10.0;
+
+std::string number(double x, bool allDigits = false) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, allDigits ? "%.17g" : "%.4g", x);
+  return buf;
+}
+
+// One thing that drives a body: what the message says, and how far past what the body answers.
+struct Drive {
+  double ratio = 0.0;
+  std::string text;
+};
+
+// The top speed at which `motion` moves the point at `at` over [t0, t1], and how it does.
+struct MotionSpeed {
+  double speed = 0.0;  // [m/s]
+  std::string how;
+};
+MotionSpeed topSpeed(const Movement& motion, double t0, double t1, const Vec3& at) {
+  MotionSpeed top;
+  const auto consider = [&](double speed, std::string how) {
+    if (!(speed <= top.speed)) top = {speed, std::move(how)};
+  };
+  for (std::size_t k = 1; k < motion.keys.size(); ++k) {
+    const Movement::Key &a = motion.keys[k - 1], &b = motion.keys[k];
+    if (b.time < t0 || a.time > t1) continue;
+    const double distance = length(b.offset - a.offset), span = b.time - a.time;
+    // A cubic segment's speed peaks at about 1.5 times its chord's (zero tangents at its ends).
+    // Times so close that four digits do not tell them apart get all of theirs.
+    const bool close = number(a.time) == number(b.time);
+    consider(distance / span * (motion.cubic ? 1.5 : 1.0),
+             "its keyframes at t = " + number(a.time, close) + " s and " + number(b.time, close) + " s move it " +
+                 number(distance) + " m in " + number(span) + " s");
+  }
+  if (motion.frequency > 0.0) {
+    consider(2.0 * kPi * motion.frequency * length(motion.amplitude),
+             "it oscillates by " + number(length(motion.amplitude)) + " m at " + number(motion.frequency) + " Hz");
+  }
+  if (motion.spin != 0.0) {
+    const Vec3 r = at - motion.centre;
+    const double radius = length(r - motion.axis * dot(r, motion.axis));
+    consider(std::fabs(motion.spin) * radius, "it spins at " + number(std::fabs(motion.spin) * 180.0 / kPi) +
+                                                  " deg/s, " + number(radius) + " m from its axis");
+  }
+  return top;
+}
+
+// Whether a triangle collider's rest bounds, carried by its motion over [t0, t1] (at its ends and
+// its keys between), come within `margin` of `body`. A spinning one always may.
+bool sweepsNear(const TriangleCollider& c, double t0, double t1, const Bounds& body, double margin) {
+  if (c.motion.spin != 0.0 || c.nodes.empty() || !isFinite(body.lo) || !isFinite(body.hi)) return true;
+  std::vector<double> times{t0, t1};
+  for (const Movement::Key& k : c.motion.keys) {
+    if (k.time > t0 && k.time < t1) times.push_back(k.time);
+  }
+  const Vec3 swing = c.motion.amplitude;  // an oscillation reaches this far either way
+  Bounds swept{c.nodes[0].lo + c.motion.translation(t0) - swing, c.nodes[0].hi + c.motion.translation(t0) + swing};
+  for (double t : times) {
+    swept.lo = componentMin(swept.lo, c.nodes[0].lo + c.motion.translation(t) - swing);
+    swept.hi = componentMax(swept.hi, c.nodes[0].hi + c.motion.translation(t) + swing);
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (swept.lo[a] > body.hi[a] + margin || swept.hi[a] < body.lo[a] - margin) return false;
+  }
+  return true;
+}
+
+// Step of sceneCause: the moving colliders and the body's pins, each as fast as it goes over
+// [since, now] against the body's speed.
+void movingDrives(const World& world, uint32_t body, double since, const BodyResponse& response,
+                  std::vector<Drive>& drives) {
+  const Model& model = world.model();
+  const BodyInfo& info = model.bodies[body];
+  const std::vector<Vec3>& x = world.positions();
+  const std::vector<Vec3> own(x.begin() + info.firstVertex, x.begin() + info.firstVertex + info.vertexCount);
+  const Bounds bounds = boundsOf(own);
+  const Vec3 centre = (bounds.lo + bounds.hi) * 0.5;
+  const double now = world.time();
+  const auto consider = [&](const Movement& motion, const std::string& who) {
+    const MotionSpeed top = topSpeed(motion, since, now, centre);
+    const double ratio = top.speed / response.speed();
+    if (ratio > kFasterThanTheBody) {
+      drives.push_back({ratio, who + " moving at " + number(top.speed) + " m/s (" + top.how + "), more than the " +
+                                   number(response.speed()) + " m/s at which the body can give way"});
+    }
+  };
+  for (std::size_t p = 0; p < model.colliders.planes.size(); ++p) {
+    const Movement& motion = model.colliders.planes[p].motion;
+    if (motion.moves()) consider(motion, "[[plane]] #" + std::to_string(p + 1));
+  }
+  for (const TriangleCollider& c : model.colliders.meshes) {
+    if (c.motion.moves() && sweepsNear(c, since, now, bounds, info.restSize)) consider(c.motion, "collider '" + c.name + "'");
+  }
+  for (const Model::PinTrack& track : model.pinTracks) {
+    if (track.body == body && track.motion.moves()) consider(track.motion, "its pins (pin_motion)");
+  }
+}
+
+}  // namespace
+
+double BodyResponse::sag(double g, double restSize) const {
+  const double n = restSize / length;
+  return g * n * n / (2.0 * omega * omega);
+}
+
+BodyResponse bodyResponse(const Model& model, uint32_t body) {
+  const BodyInfo& info = model.bodies[body];
+  BodyResponse r;
+  if (info.strutCount == 0 || info.vertexCount == 0) return r;
+  double stiffness = 0.0, length = 0.0;
+  for (uint32_t s = info.firstStrut; s < info.firstStrut + info.strutCount; ++s) {
+    stiffness += model.struts[s].stiffness;
+    length += model.struts[s].restLength;
+  }
+  const double vertexMass = info.mass / info.vertexCount;
+  r.omega = std::sqrt(stiffness / info.strutCount / vertexMass);
+  r.length = length / info.strutCount;
+  return r;
+}
+
+std::string sceneCause(const World& world, uint32_t body, double since) {
+  const Model& model = world.model();
+
+  const BodyInfo& info = model.bodies[body];
+  const BodyResponse response = bodyResponse(model, body);
+  if (!(response.omega > 0.0) || !(response.length > 0.0)) return "";
+  std::vector<Drive> drives;
+  const double g = length(model.gravity);
+  const double sag = response.sag(g, info.restSize);
+  if (sag > kSagOfSize * info.restSize) {
+    drives.push_back({sag / info.restSize, "gravity " + number(g) + " m/s^2 (it would sag the body by " + number(sag) +
+                                               " m under its own weight, " + number(sag / info.restSize) +
+                                               " times its size)"});
+  }
+  movingDrives(world, body, since, response, drives);
+  const auto most = std::max_element(drives.begin(), drives.end(),
+                                     [](const Drive& a, const Drive& b) { return a.ratio < b.ratio; });
+  return most == drives.end() ? "" : most->text;
 }
 
 uint64_t stateHash(const World& world) {

@@ -1,5 +1,6 @@
 #include "sim/monitor.h"
 
+#include "sim/forces.h"
 #include "sim/interrupt.h"
 #include "sim/intersections.h"
 
@@ -52,6 +53,21 @@ std::string describe(const World& world, uint32_t body, const std::string& what,
   return s.str();
 }
 
+// A failure of `body` (not a criterion): what went wrong and what to try, unless the scene drove
+// it there since `since` (sceneCause): then that, and that no step fixes it.
+Failure failed(const World& world, uint32_t body, const std::string& what, const std::string& advice, double since) {
+  const std::string cause = sceneCause(world, body, since);
+  if (cause.empty()) return Failure{body, world.stepCount(), world.time(), describe(world, body, what, advice)};
+  Failure failure{body, world.stepCount(), world.time(),
+                  describe(world, body, what,
+                           "A smaller step does not fix it: " + cause +
+                               ". The scene asks more of the body than it can follow: lower what drives it (gravity, "
+                               "a motion's speed: spread its keyframes), or stiffen the body (shorter strut_period "
+                               "or stretch_period).")};
+  failure.cause = cause;
+  return failure;
+}
+
 // What to try after an instability; a body with gas also has a volume_period to lengthen.
 std::string stepAdvice(const BodyInfo& body) {
   const bool own = body.membraneModulus > 0.0;  // the body material
@@ -66,7 +82,7 @@ std::string stepAdvice(const BodyInfo& body) {
 
 // Step of Monitor::check: a contact search that overflowed did not act, and the bodies' state
 // explains why: reported first.
-std::optional<Failure> contactOverflowFailure(const World& world) {
+std::optional<Failure> contactOverflowFailure(const World& world, double since) {
   const Model& model = world.model();
   const BodyContacts* contacts = world.bodyContacts();
   if (!contacts || contacts->sinceStart().overflows == 0) return std::nullopt;
@@ -75,7 +91,18 @@ std::optional<Failure> contactOverflowFailure(const World& world) {
   s << "the contact search between it and " << (a == b ? "itself" : "body '" + model.bodies[b].name + "'")
     << " found more than " << kMaxCandidatesPerPrimitive
     << " candidate pairs per primitive (bodies that have blown up, or start inside each other)";
-  return Failure{a, world.stepCount(), world.time(), describe(world, a, s.str(), stepAdvice(model.bodies[a]))};
+  return failed(world, a, s.str(), stepAdvice(model.bodies[a]), since);
+}
+
+// What keeps a body's shape, for a body that lost it.
+std::string keepShapeAdvice(const BodyInfo& info) {
+  return info.membraneModulus > 0.0
+             ? "The body is too soft to keep its shape: try a shorter bend_period or stretch_period "
+               "(`springy suggest --keep-volume` finds them), or a gas (volume_period)."
+             : "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
+               "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
+               "strut_period, or the body material (scenes/README.md), which means the same at "
+               "every resolution.";
 }
 
 // The failure of a body whose volume fell to `ratio` of rest, below the required `minVolume`
@@ -84,27 +111,51 @@ Failure volumeFailure(const World& world, uint32_t b, double ratio, double minVo
   const BodyInfo& info = world.model().bodies[b];
   std::ostringstream s;
   s << "its volume fell to " << 100.0 * ratio << "% of rest, below the required " << 100.0 * minVolume << "%";
-  Failure failure{b, world.stepCount(), world.time(),
-                  describe(world, b, s.str(),
-                           info.membraneModulus > 0.0
-                               ? "The body is too soft to keep its shape: try a shorter bend_period or stretch_period "
-                                 "(`springy suggest --keep-volume` finds them), or a gas (volume_period)."
-                               : "The body is too soft to keep its shape: try a shorter hinge_period (stiffer hinges; "
-                                 "their bending stiffness falls with the cube of the mesh spacing) or a shorter "
-                                 "strut_period, or the body material (scenes/README.md), which means the same at "
-                                 "every resolution.")};
-  if (ratio <= 0.0 && !info.selfContact) {
-    // Inside out: a crush folded it through itself, which its own contact would stop.
-    failure.message += " It turned inside out: with self_contact = true its own faces stop it folding through "
-                       "itself (docs/model.md section 19; it costs run time).";
-  }
+  Failure failure{b, world.stepCount(), world.time(), describe(world, b, s.str(), keepShapeAdvice(info))};
   failure.criterion = true;
+  return failure;
+}
+
+// Whether a closed body's volume says it collapsed (kCollapsedVolume): at or below that share of
+// its rest volume or of `before` (its volume at the last frame), or not a number.
+bool collapsed(const BodyInfo& info, double volume, double before) {
+  return info.restVolume > 0.0 && !(volume > kCollapsedVolume * std::max(info.restVolume, before));
+}
+
+// The failure of a closed body whose volume collapsed (collapsed()): NaN, blown up through
+// itself, inside out, crushed flat or folded.
+Failure collapseFailure(const World& world, uint32_t b, double volume, double before, double since) {
+  const BodyInfo& info = world.model().bodies[b];
+  if (!std::isfinite(volume)) return failed(world, b, "a position or velocity is NaN or infinite", stepAdvice(info), since);
+  const double ratio = volume / info.restVolume;
+  std::ostringstream s;
+  if (ratio < -0.5) {
+    // Through itself to more than half its size inside out: no crush does that, an instability
+    // does (an explicit step far past its limit, a gas whose period the step does not resolve).
+    s << "it blew up: it turned inside out to " << 100.0 * ratio << "% of its rest volume";
+    return failed(world, b, s.str(), stepAdvice(info), since);
+  }
+  if (volume < 0.0) {
+    s << "it turned inside out: its volume is " << 100.0 * ratio << "% of rest";
+  } else if (ratio < 1e-9) {
+    s << "it was crushed flat: its volume is " << 100.0 * ratio << "% of rest";
+  } else {
+    s << "it collapsed to " << 100.0 * ratio << "% of its rest volume";
+  }
+  s << " (" << 100.0 * before / info.restVolume << "% at the last frame; a closed body below "
+    << 100.0 * kCollapsedVolume << "% has lost its shape)";
+  Failure failure = failed(world, b, s.str(), keepShapeAdvice(info), since);
+  if (volume <= 0.0 && !info.selfContact && failure.cause.empty()) {
+    // Inside out: a crush folded it through itself, which its own contact would stop.
+    failure.message += " If it folded through itself, with self_contact = true its own faces stop it "
+                       "(docs/model.md section 19; it costs run time).";
+  }
   return failure;
 }
 
 // Step of Monitor::check: bodies crossing each other or themselves: whatever the contact stage
 // did, never a silent pass-through (sim/intersections.h).
-std::optional<Failure> bodyCrossingFailure(const World& world) {
+std::optional<Failure> bodyCrossingFailure(const World& world, double since) {
   const Model& model = world.model();
   if (world.bodyContacts() == nullptr) return std::nullopt;
   const std::vector<Intersection> crossing = findIntersections(model, world.positions(), 1);
@@ -119,16 +170,16 @@ std::optional<Failure> bodyCrossingFailure(const World& world) {
       << c.faceB - b.firstFace << " of '" << b.name << "'";
   }
   s << " cross at (" << c.point.x << ", " << c.point.y << ", " << c.point.z << ")";
-  return Failure{c.bodyA, world.stepCount(), world.time(),
-                 describe(world, c.bodyA, s.str(),
-                          "The contact let it through: try a smaller dt or more substeps (--substeps), or a larger "
-                          "contact_thickness; if dt is sane, please report the scene.")};
+  return failed(world, c.bodyA, s.str(),
+                "The contact let it through: try a smaller dt or more substeps (--substeps), or a larger "
+                "contact_thickness; if dt is sane, please report the scene.",
+                since);
 }
 
 // Step of Monitor::check: bodies through a collider mesh, still or moving: its contact stops
 // vertices, and an edge that passes through a triangle (or a triangle's edge through a face) is
 // caught here.
-std::optional<Failure> colliderCrossingFailure(const World& world) {
+std::optional<Failure> colliderCrossingFailure(const World& world, double since) {
   const Model& model = world.model();
   if (model.colliders.meshes.empty()) return std::nullopt;
   const std::vector<ColliderCrossing> crossing = findColliderCrossings(model, world.positions(), world.time(), 1);
@@ -139,11 +190,11 @@ std::optional<Failure> colliderCrossingFailure(const World& world) {
   s << "it passes through collider '" << model.colliders.meshes[c.collider].name << "': its face "
     << c.face - a.firstFace << " and the collider's triangle " << c.triangle << " cross at (" << c.point.x << ", "
     << c.point.y << ", " << c.point.z << ")";
-  return Failure{c.body, world.stepCount(), world.time(),
-                 describe(world, c.body, s.str(),
-                          "The contact let it through: try a smaller dt or more substeps (--substeps), a larger "
-                          "contact_thickness, or a finer body mesh (a coarse one drapes over a collider's edges "
-                          "and corners with its faces, which only its vertices are kept off)")};
+  return failed(world, c.body, s.str(),
+                "The contact let it through: try a smaller dt or more substeps (--substeps), a larger "
+                "contact_thickness, or a finer body mesh (a coarse one drapes over a collider's edges "
+                "and corners with its faces, which only its vertices are kept off)",
+                since);
 }
 
 }  // namespace
@@ -185,6 +236,7 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
   lowestBased_ = limits_.energyFromLowest && !energySwings(world.integrator());
   g_ = length(model.gravity);
   up_ = upOf(model);
+  checkedAt_[0] = checkedAt_[1] = world.time();
   const std::optional<double> support = lowestSupport(model, up_);
   for (uint32_t b = 0; b < model.bodies.size(); ++b) {
     BodyRecord r;
@@ -199,6 +251,7 @@ Monitor::Monitor(const World& world, MonitorLimits limits) : limits_(limits) {
     r.lowestTotalTime = world.time();
     r.lowestSpendable = r.energyScale;
     records_.push_back(r);
+    frameVolume_.push_back(r.start.volume);
   }
   if (world.bodyContacts() != nullptr) {
     for (uint32_t b = 0; b < model.bodies.size(); ++b) {
@@ -232,7 +285,7 @@ std::optional<Failure> Monitor::checkBody(const World& world, uint32_t b) {
   BodyMeasures m = measureBody(world, b);
   r.last = m;
   auto fail = [&](const std::string& what, const std::string& advice) {
-    return Failure{b, world.stepCount(), world.time(), describe(world, b, what, advice)};
+    return failed(world, b, what, advice, checkedAt_[0]);
   };
   if (!m.finite) return fail("a position or velocity is NaN or infinite", stepAdvice(info));
   if (m.size > limits_.sizeFactor * info.restSize) {
@@ -275,6 +328,8 @@ std::optional<Failure> Monitor::checkBody(const World& world, uint32_t b) {
   }
   r.maxStrain = std::max(r.maxStrain, m.maxStrain);
   r.maxPenetration = std::max(r.maxPenetration, m.penetration);
+  if (collapsed(info, m.volume, frameVolume_[b])) return collapseFailure(world, b, m.volume, frameVolume_[b], checkedAt_[0]);
+  frameVolume_[b] = m.volume;
   if (info.restVolume > 0.0) {
     const double ratio = m.volume / info.restVolume;
     r.minVolumeRatio = std::min(r.minVolumeRatio, ratio);
@@ -318,8 +373,7 @@ std::optional<Failure> Monitor::checkTouchingEnergy(const World& world) {
     if (limits_.energyFromLowest) s << " (its lowest, at t = " << touchingLowestTime_ << " s)";
     s << " to " << total << " J, more than " << allowed
       << " J, although nothing injects energy (the integration or the contact is unstable or too coarse)";
-    return Failure{named, world.stepCount(), world.time(),
-                   describe(world, named, s.str(), stepAdvice(model.bodies[named]))};
+    return failed(world, named, s.str(), stepAdvice(model.bodies[named]), checkedAt_[0]);
   }
   if (total < touchingLowest_) {
     touchingLowest_ = total, touchingLowestTime_ = world.time();
@@ -330,7 +384,37 @@ std::optional<Failure> Monitor::checkTouchingEnergy(const World& world) {
 }
 
 std::optional<Failure> Monitor::check(const World& world) {
-  if (std::optional<Failure> failure = contactOverflowFailure(world)) return failure;
+  if (watched_) return watched_;
+  std::optional<Failure> failure = checkAll(world);
+  checkedAt_[0] = checkedAt_[1], checkedAt_[1] = world.time();
+  return failure;
+}
+
+std::optional<Failure> Monitor::watchStep(const World& world) {
+  if (watched_) return watched_;
+  const Model& model = world.model();
+  const Vec3* x = world.positions().data();
+  for (uint32_t b = 0; b < model.bodies.size() && !watched_; ++b) {
+    const BodyInfo& info = model.bodies[b];
+    if (info.restVolume > 0.0) {
+      // Enclosed volume's own sum, as measureBody's: the same number a frame's check sees.
+      const double volume = enclosedVolume(model, b, x);
+      if (collapsed(info, volume, frameVolume_[b]))
+        watched_ = collapseFailure(world, b, volume, frameVolume_[b], checkedAt_[0]);
+      continue;
+    }
+    for (uint32_t v = info.firstVertex; v < info.firstVertex + info.vertexCount; ++v) {
+      if (isFinite(x[v])) continue;
+      watched_ = failed(world, b, "a position or velocity is NaN or infinite", stepAdvice(info), checkedAt_[0]);
+      break;
+    }
+  }
+  return watched_;
+}
+
+std::optional<Failure> Monitor::checkAll(const World& world) {
+  const double since = checkedAt_[0];
+  if (std::optional<Failure> failure = contactOverflowFailure(world, since)) return failure;
   synchronized_ = Synchronized::NotYet;
   for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
     if (std::optional<Failure> failure = checkBody(world, b)) return failure;
@@ -338,8 +422,8 @@ std::optional<Failure> Monitor::check(const World& world) {
   if (checkEnergy_ && !touching_.empty()) {
     if (std::optional<Failure> failure = checkTouchingEnergy(world)) return failure;
   }
-  if (std::optional<Failure> failure = bodyCrossingFailure(world)) return failure;
-  return colliderCrossingFailure(world);
+  if (std::optional<Failure> failure = bodyCrossingFailure(world, since)) return failure;
+  return colliderCrossingFailure(world, since);
 }
 
 void RestWatch::add(const std::vector<Vec3>& x) {
@@ -364,20 +448,36 @@ std::pair<double, uint32_t> RestWatch::largestMove(const BodyInfo& info) const {
   return {moved, worst};
 }
 
-bool stepTo(World& world, double time) {
+bool stepTo(World& world, double time, Monitor* monitor) {
   while (!world.reached(time)) {
     if (interrupted()) return false;
     world.stepToward(time);
     if (!world.stepProblem().empty()) return false;
+    if (monitor && monitor->watchStep(world)) return false;
   }
   return true;
 }
 
+Failure stepFailure(const World& world, double since) {
+  Failure failure{0, world.stepCount(), world.time(), world.stepProblem()};
+  for (uint32_t b = 0; b < world.model().bodies.size(); ++b) {
+    failure.cause = sceneCause(world, b, since);
+    if (failure.cause.empty()) continue;
+    failure.body = b;
+    failure.message += ". A smaller step does not fix it: body '" + world.model().bodies[b].name + "' is driven by " +
+                       failure.cause + ".";
+    break;
+  }
+  return failure;
+}
+
 std::optional<Failure> advanceTo(World& world, Monitor& monitor, double time) {
-  if (!stepTo(world, time) && world.stepProblem().empty()) return std::nullopt;  // interrupted
+  const double since = monitor.since();
+  const bool reached = stepTo(world, time, &monitor);
+  if (!reached && world.stepProblem().empty() && !monitor.watched()) return std::nullopt;  // interrupted
   std::optional<Failure> failure = monitor.check(world);
   if (failure || world.stepProblem().empty()) return failure;
-  return Failure{0, world.stepCount(), world.time(), world.stepProblem()};
+  return stepFailure(world, since);
 }
 
 }  // namespace springy

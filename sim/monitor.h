@@ -1,7 +1,13 @@
 // springy: stability monitoring. Never hide instability: a run is watched for non-finite
 // values, bodies growing far beyond their rest size, total energy rising when nothing injects
-// energy, and vertices behind a plane. The first failure stops the run with a message that
-// names the body, the step and the simulated time, and suggests what to try.
+// energy, vertices behind a plane, and closed bodies turned inside out or crushed flat. The first
+// failure stops the run with a message that names the body, the step and the simulated time, and
+// suggests what to try; when the scene drives the body harder than it can follow (gravity, a
+// collider or pins too fast), it names that instead of blaming the step.
+//
+// What a body can do between two frames and undo by the next (turn inside out, collapse, go NaN
+// and take the run with it) is watched every step (Monitor::watchStep, from stepTo): a pass over
+// the faces and vertices, a few percent of a step. The rest (energies, sizes, crossings) at frames.
 #pragma once
 
 #include <cstdint>
@@ -31,7 +37,15 @@ struct Failure {
   double time;
   std::string message;     // complete, ready to print
   bool criterion = false;  // a limit the run was given (MonitorLimits::minVolume), not an instability
+  // What the scene did that no step can fix (sim/diagnostics.h sceneCause: "gravity 1e+06
+  // m/s^2 ...", "collider 'plate' moving at 1000 m/s ..."); empty when the step may be at fault.
+  std::string cause = {};
 };
+
+// A closed body whose volume falls to this share of its rest volume (or of its volume at the last
+// frame) has collapsed: crushed flat, folded through itself or inside out. Far below what a body
+// that keeps its shape comes to (scenes/press.toml's ball, squeezed to half its height, keeps 81%).
+constexpr double kCollapsedVolume = 0.01;
 
 // Per-body running extremes, for reports.
 struct BodyRecord {
@@ -84,7 +98,15 @@ class Monitor {
   Monitor(const World& world, MonitorLimits limits = {});
   // Measures every body; returns the first failure, if any. Call as often as you like (every
   // output frame is typical): each call costs one pass over the vertices and elements.
+  // A failure watchStep saw comes first.
   std::optional<Failure> check(const World& world);
+  // The checks a run makes after every step, so that nothing between two frames passes: every
+  // closed body's volume (at or below zero, or collapsed: kCollapsedVolume) and every open one's
+  // positions finite. O(faces + vertices); the failure, if any, is kept for check().
+  std::optional<Failure> watchStep(const World& world);
+  const std::optional<Failure>& watched() const { return watched_; }
+  // Since when a failure now is looked for a cause in the scene (the check before the last).
+  double since() const { return checkedAt_[0]; }
   const std::vector<BodyRecord>& records() const { return records_; }
   // The volume limit from the next check on (MonitorLimits::minVolume; 0: not checked).
   void setMinVolume(double fraction) { limits_.minVolume = fraction; }
@@ -92,6 +114,11 @@ class Monitor {
 
  private:
   MonitorLimits limits_;
+  std::optional<Failure> watched_;  // watchStep's failure
+  std::vector<double> frameVolume_;  // per body: its volume at the last check [m^3]
+  // The times of the last two checks: what drove a body is looked for since the earlier
+  // (sceneCause), so that a jump just before a frame is still seen after it.
+  double checkedAt_[2] = {0.0, 0.0};
   bool checkEnergy_;
   bool lowestBased_;  // a rise from the lowest measured against what was left then (not the start's scale)
   std::vector<BodyRecord> records_;
@@ -112,6 +139,8 @@ class Monitor {
   // Steps of check(). One body: finite, not blown up, its energy not risen (unless it touches
   // others), not behind a plane, its volume above the limit; its record updated.
   std::optional<Failure> checkBody(const World& world, uint32_t body);
+  // check() less watchStep's failure and the clock of checks.
+  std::optional<Failure> checkAll(const World& world);
   // The bodies that touch each other: their energy summed, which nothing may raise.
   std::optional<Failure> checkTouchingEnergy(const World& world);
   enum class Synchronized { NotYet, Yes, No };  // in this check
@@ -124,7 +153,13 @@ class Monitor {
 // it exactly). Returns false when it stopped short: the adaptive step could not meet its
 // tolerance (World::stepProblem), or an interruption was requested (sim/interrupt.h), polled
 // before every step so that a long frame (a fine step, a large model) stops at once.
-bool stepTo(World& world, double time);
+// With `monitor`, its watchStep after every step: false too when it fails.
+bool stepTo(World& world, double time, Monitor* monitor = nullptr);
+
+// A failure of the step (World::stepProblem) at the world's time, with what the scene did, if
+// anything, to any body since `since` (sceneCause): an adaptive step that shrinks to nothing at a
+// collider's jump is the jump's failure, not the tolerance's.
+Failure stepFailure(const World& world, double since);
 
 // stepTo, then the monitor's check: the failure, if any (the monitor's first, since a blow-up it
 // sees says more than the step's problem). Nothing when interrupted: the caller sees

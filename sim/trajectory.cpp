@@ -50,9 +50,9 @@ RunPath tracePath(const Model& model, const PathSettings& settings) {
   for (long f = 1; f <= frames; ++f) {
     const double until = static_cast<double>(f) * settings.frame;
     const double start = threadCpuSeconds();
-    const bool reached = stepTo(world, until);
+    const bool reached = stepTo(world, until, &monitor);  // watched every step, as a run is
     seconds += threadCpuSeconds() - start;
-    if (!reached && world.stepProblem().empty()) {
+    if (!reached && world.stepProblem().empty() && !monitor.watched()) {
       path.failure = "interrupted";
       break;
     }

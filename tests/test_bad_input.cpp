@@ -234,11 +234,10 @@ TEST_F(BadInput, BadBodyValuesNameTheirKeyAndLine) {
              ":6:8: [[body]] #1 key 'mass': must be in [1e-09, 1e+09], got 1e-300");
   EXPECT_HAS(errorOf([&] { loadScene(scene("shape = \"icosphere\"\nhinge_period = 1e-300")); }),
              "key 'hinge_period': must be in [1e-06, 1e+06]");
-  // A size so small that the faces have no area: the body's own line, not just the file.
+  // A size so small that the faces have no area: the key that made it so, and its line (issue 63).
   const std::string tiny = scene("shape = \"icosphere\"\nscale = 1e-200");
-  const SceneDesc desc = loadScene(tiny);
-  const std::string message = errorOf([&] { buildModel(desc); });
-  EXPECT_HAS(message, tiny + ":4:1: [[body]] #1: body 'body 1': triangle");
+  const std::string message = errorOf([&] { loadScene(tiny); });
+  EXPECT_HAS(message, tiny + ":6:9: [[body]] #1 key 'scale': scale = 1e-200 at line 6 flattens the mesh: triangle");
   EXPECT_HAS(message, "has zero area");
 }
 

@@ -201,6 +201,14 @@ void refuseUnlessSpringys(const std::string& path, std::string_view header, cons
               ": refusing to replace it. Move it away, or name another output");
 }
 
+void refuseUnlessMarked(const std::string& path, std::string_view mark, std::size_t within, const std::string& whose) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return;
+  if (S_ISREG(st.st_mode) && firstBytes(path, within).find(mark) != std::string::npos) return;
+  throw Error(path + ": exists and was not written by springy (it does not carry \"" + std::string(mark) + "\"); " +
+              whose + ": refusing to replace it. Move it away, or name another output");
+}
+
 bool isDirectory(const std::string& path) {
   struct stat st {};
   return ::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode);

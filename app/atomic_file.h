@@ -69,6 +69,11 @@ void refuseInputs(const std::string& target, const std::vector<std::string>& inp
 // first bytes (`header`, e.g. "# springy export"). Otherwise throws springy::Error "PATH: exists
 // and was not written by springy (...); `whose`; move it away or ...".
 void refuseUnlessSpringys(const std::string& path, std::string_view header, const std::string& whose);
+// The same for a file whose mark is not at its start (springy's videos and stills carry
+// render/image.h kSpringyMark in their first `within` bytes): an existing `path` is replaced only
+// if those bytes hold `mark`. Throws springy::Error "PATH: exists and was not written by springy
+// ...; `whose`; ...".
+void refuseUnlessMarked(const std::string& path, std::string_view mark, std::size_t within, const std::string& whose);
 // The first `count` bytes of `path` ("" when it cannot be read).
 std::string firstBytes(const std::string& path, std::size_t count);
 

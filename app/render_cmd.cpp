@@ -124,6 +124,18 @@ std::vector<std::string> videoOutputs(const RenderOptions& options) {
   for (const std::string& scene : options.scenes) {
     const std::string name = stemOf(scene) + ".mp4";
     outputs.push_back(out.empty() ? name : directory ? (fs::path(out) / name).string() : out);
+    // A name springy made up replaces only a video of springy's; one the user gave, what it names.
+    // Never an input, which says so first (a scene's error shows when the scene is run).
+    if (out.empty() || directory) {
+      std::vector<std::string> inputs;
+      try {
+        inputs = sceneInputFiles(scene, options.run.sets);
+      } catch (const Error&) {  // the scene's own error shows when it is run
+      }
+      refuseInputs(outputs.back(), inputs);
+      refuseUnlessMarked(outputs.back(), render::kSpringyMark, render::kMarkSearchBytes,
+                         "render names a scene's video SCENE.mp4 itself (-o FILE.mp4 names the file to replace)");
+    }
   }
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
@@ -290,12 +302,36 @@ int timeDecimals(const std::vector<double>& times) {
   return kMost;
 }
 
+// The still at time t, and the contact sheet, of the scene `stem` in `folder`.
+std::string stillFile(const std::string& folder, const std::string& stem, double t, int decimals) {
+  char name[64];
+  std::snprintf(name, sizeof name, "_t%0*.*f.png", decimals + 4, decimals, t);
+  return (std::filesystem::path(folder) / (stem + name)).string();
+}
+std::string sheetFile(const std::string& folder, const std::string& stem) {
+  return (std::filesystem::path(folder) / (stem + "_sheet.png")).string();
+}
+
+// Before the run: the stills' names are springy's, so each replaces only a still of springy's.
+void refuseOthersStills(const FramesOptions& options, const std::vector<double>& times, int decimals,
+                        const std::string& stem) {
+  const std::vector<std::string> inputs = sceneInputFiles(options.scenes, options.run.sets);
+  const auto refuse = [&](const std::string& file) {
+    refuseInputs(file, inputs);  // an input says so first
+    refuseUnlessMarked(file, render::kSpringyMark, render::kMarkSearchBytes,
+                       "frames names the stills SCENE_tTIME.png itself");
+  };
+  if (!options.sheetOnly) {
+    for (double t : times) refuse(stillFile(options.output, stem, t, decimals));
+  }
+  if (options.sheet || options.sheetOnly) refuse(sheetFile(options.output, stem));
+}
+
 // One pass of framesOne over the times: its exit status, or nothing when the run was the default
 // step's try, it failed, and a step that passes was found (the stills are then drawn again, over
 // the same files).
 std::optional<int> framesRun(Run& run, const FramesOptions& options, const std::vector<double>& times,
                              int decimals, const std::string& stem) {
-  namespace fs = std::filesystem;
   SceneView view(run.scene(), run.world(), renderSettingsOf(run.scene()));
   std::vector<render::Image> stills;
   std::vector<std::string> labels;
@@ -314,10 +350,9 @@ std::optional<int> framesRun(Run& run, const FramesOptions& options, const std::
     std::printf("%s\n", file.c_str());
   };
   for (double t : times) {
-    char label[64], name[64];
+    char label[64];
     std::snprintf(label, sizeof label, "t = %.*f s", decimals, t);
-    std::snprintf(name, sizeof name, "_t%0*.*f.png", decimals + 4, decimals, t);
-    const std::string file = (fs::path(options.output) / (stem + name)).string();
+    const std::string file = stillFile(options.output, stem, t, decimals);
     // Frame by frame, so the monitor sees the run as a video would, then to the still's time.
     if (run.runUntil(t)) {
       if (run.retry()) return std::nullopt;
@@ -332,7 +367,7 @@ std::optional<int> framesRun(Run& run, const FramesOptions& options, const std::
     labels.push_back(label);
   }
   if (options.sheet || options.sheetOnly) {
-    const std::string file = (fs::path(options.output) / (stem + "_sheet.png")).string();
+    const std::string file = sheetFile(options.output, stem);
     if (interrupted()) return stopped(file);
     write(file, render::makeContactSheet(stills, labels, sheetOptions(stills.size())));
   }
@@ -346,6 +381,7 @@ int framesOne(const std::string& path, const FramesOptions& options) {
   const int decimals = timeDecimals(times);
   makeDirectories(options.output, "-o");
   const std::string stem = stemOf(path);
+  refuseOthersStills(options, times, decimals, stem);
   for (;;) {  // again only after the default step's try failed and a longer step passed
     if (const std::optional<int> status = framesRun(run, options, times, decimals, stem)) return *status;
   }

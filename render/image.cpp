@@ -32,6 +32,33 @@ void append(void* context, void* data, int size) {
 
 std::string errnoText(int error) { return std::strerror(error); }
 
+// CRC-32 of a PNG chunk's type and data (ISO 3309, as PNG specifies it), bit by bit: one short
+// chunk per image.
+std::uint32_t pngCrc(const std::uint8_t* bytes, std::size_t count) {
+  std::uint32_t crc = 0xffffffffu;
+  for (std::size_t i = 0; i < count; ++i) {
+    crc ^= bytes[i];
+    for (int bit = 0; bit < 8; ++bit) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return crc ^ 0xffffffffu;
+}
+
+void appendBigEndian(std::string& out, std::uint32_t value) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<char>((value >> shift) & 0xffu));
+}
+
+// Inserts the tEXt chunk "Software: made with springy" after the signature and IHDR (8 + 25
+// bytes), where a reader of the first bytes finds it.
+void markPng(std::vector<std::uint8_t>& png) {
+  constexpr std::size_t kAfterHeader = 8 + 4 + 4 + 13 + 4;
+  const std::string typeAndText = "tEXtSoftware" + std::string(1, '\0') + std::string(kSpringyMark);
+  std::string chunk;
+  appendBigEndian(chunk, static_cast<std::uint32_t>(typeAndText.size() - 4));
+  chunk += typeAndText;
+  appendBigEndian(chunk, pngCrc(reinterpret_cast<const std::uint8_t*>(typeAndText.data()), typeAndText.size()));
+  png.insert(png.begin() + static_cast<std::ptrdiff_t>(kAfterHeader), chunk.begin(), chunk.end());
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> encodePng(int width, int height, std::span<const std::uint8_t> rgba) {
@@ -42,6 +69,7 @@ std::vector<std::uint8_t> encodePng(int width, int height, std::span<const std::
   if (!stbi_write_png_to_func(append, &png, width, height, 4, rgba.data(), width * 4) || png.empty())
     throw RenderError("encodePng: cannot encode a " + std::to_string(width) + "x" + std::to_string(height) +
                       " image");
+  markPng(png);
   return png;
 }
 

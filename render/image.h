@@ -4,11 +4,19 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "render/text.h"
 
 namespace springy::render {
+
+// What springy's own images and videos carry, so that a later run may replace a file it named
+// itself (SCENE.mp4, SCENE_tT.png) only when springy wrote it (app/atomic_file.h
+// refuseUnlessMarked): a PNG's tEXt chunk "Software" right after its header, an MP4's comment
+// (in its index, which +faststart puts first). Within the first kMarkSearchBytes of the file.
+inline constexpr std::string_view kSpringyMark = "made with springy";
+inline constexpr std::size_t kMarkSearchBytes = std::size_t{8} << 20;
 
 // An RGBA8 top-down image (rgba.size() == width*height*4) as the bytes of a PNG file, for
 // writers that check every write themselves (the app's AtomicFile). Throws RenderError.

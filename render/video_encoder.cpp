@@ -15,6 +15,7 @@ extern "C" {
 #include <mutex>
 
 #include "render/error.h"
+#include "render/image.h"
 
 namespace springy::render {
 
@@ -222,6 +223,7 @@ struct VideoEncoder::Impl {
   void writeHeader() {
     AVDictionary* muxOpts = nullptr;
     av_dict_set(&muxOpts, "movflags", "+faststart", 0);
+    av_dict_set(&fmt->metadata, "comment", std::string(kSpringyMark).c_str(), 0);  // render/image.h
     const int ret = avformat_write_header(fmt, &muxOpts);
     av_dict_free(&muxOpts);
     if (ret < 0) fail("cannot write the file header", ret);

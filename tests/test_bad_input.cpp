@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "run_springy.h"
+#include "test_folder.h"
 #include "scene/scene.h"
 #include "sim/error.h"
 #include "sim/limits.h"
@@ -39,21 +40,9 @@ using test::errorOf;
 
 #define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << (text)
 
-class BadInput : public ::testing::Test {
+class BadInput : public test::FolderTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("springy_bad_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string write(const std::string& name, const std::string& content) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << content;
-    return path;
-  }
+  BadInput() : FolderTest("bad") {}
   // A scene with one body given by `body` (TOML lines; 3 m above the ground unless it gives its
   // position) and a ground plane.
   std::string scene(const std::string& body, const std::string& extra = "") const {
@@ -66,7 +55,6 @@ class BadInput : public ::testing::Test {
     std::sort(names.begin(), names.end());
     return names;
   }
-  fs::path dir_;
 };
 
 // A closed mesh as binary little-endian or ASCII PLY.

@@ -15,6 +15,7 @@
 
 #include "error_of.h"
 #include "run_springy.h"
+#include "test_folder.h"
 #include "scene/scene.h"
 #include "sim/monitor.h"
 #include "sim/setup.h"
@@ -31,22 +32,9 @@ using test::runSpringy;
 #define EXPECT_HAS(text, part) EXPECT_NE((text).find(part), std::string::npos) << (text)
 #define EXPECT_LACKS(text, part) EXPECT_EQ((text).find(part), std::string::npos) << (text)
 
-class MonitorBad : public ::testing::Test {
+class MonitorBad : public springy::test::FolderTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("springy_monitor_bad_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  std::string write(const std::string& name, const std::string& content) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << content;
-    return path;
-  }
-  fs::path dir_;
+  MonitorBad() : FolderTest("monitor_bad") {}
 };
 
 // A soft ball 12 m across dropped in gravity 1e6 m/s^2 lies flat on the ground after four steps:

@@ -23,6 +23,7 @@
 
 #include "render/image.h"
 #include "springy_process.h"
+#include "test_folder.h"
 
 namespace {
 
@@ -34,14 +35,9 @@ using springy::test::Springy;
 std::string data(const std::string& name) { return std::string(SPRINGY_SOURCE_DIR) + "/tests/data/" + name; }
 const std::string kTiny = data("app/tiny.toml");
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using springy::test::readFile;
 
-void writeFile(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+using springy::test::writeFile;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -100,14 +96,18 @@ TEST_F(OutputTest, FramesOnAFullDiskFailAndKeepTheOldStill) {
   // RLIMIT_FSIZE makes writes past 2 KiB fail with EFBIG, as ENOSPC would on a full disk; with
   // SIGXFSZ ignored from the start, as springy had it, the unchecked PNG writer committed the
   // truncated still and exited 0. A 320x240 still is larger than 2 KiB.
+  // The still from before is springy's (a small one): a still of someone else's is refused
+  // before the run (tests/test_outputs_owned.cpp).
   const fs::path still = dir_ / "tiny_t000.00.png";
-  writeFile(still, "a still from before");
+  ASSERT_EQ(run({"frames", kTiny, "--times", "0", "--width", "16", "--height", "16", "-o", dir_.string()}).status, 0);
+  const std::string before = readFile(still);
+  ASSERT_LT(before.size(), 2048u);
   const Result s = run({"frames", kTiny, "--times", "0,0.5", "--width", "320", "--height", "240", "-o",
                         dir_.string()},
                        {.fileSizeLimit = 2048, .ignoreXfsz = true});
   EXPECT_EQ(s.status, 1) << s.output;
   EXPECT_TRUE(contains(s.output, still.string() + ": writing failed: File too large")) << s.output;
-  EXPECT_EQ(readFile(still), "a still from before");
+  EXPECT_EQ(readFile(still), before);
   EXPECT_EQ(names(dir_), std::vector<std::string>{"tiny_t000.00.png"}) << listing(dir_);
 }
 

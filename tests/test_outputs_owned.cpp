@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "springy_process.h"
+#include "test_folder.h"
 
 namespace {
 
@@ -30,14 +31,8 @@ using springy::test::Clock;
 using springy::test::Result;
 using springy::test::Springy;
 
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-void writeFile(const fs::path& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+using springy::test::readFile;
+using springy::test::writeFile;
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -49,15 +44,9 @@ const std::string kIcosahedron =
     "f 1 2 9\nf 1 9 5\nf 1 5 6\nf 1 6 11\nf 1 11 2\nf 2 11 8\nf 2 8 7\nf 2 7 9\nf 9 7 10\nf 9 10 5\n"
     "f 5 10 3\nf 5 3 6\nf 6 3 12\nf 6 12 11\nf 11 12 8\nf 4 3 10\nf 4 10 7\nf 4 7 8\nf 4 8 12\nf 4 12 3\n";
 
-class OwnedOutputs : public ::testing::Test {
+class OwnedOutputs : public springy::test::FolderTest {
  protected:
-  void SetUp() override {
-    const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    dir_ = fs::temp_directory_path() / ("springy_owned_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
+  OwnedOutputs() : FolderTest("owned") {}
 
   // A scene `stem`.toml whose body is the mesh `mesh` (an icosahedron OBJ whose mtllib is `mtl`,
   // which names the texture `texture`), above a ground; `extra` goes in [scene].
@@ -122,9 +111,6 @@ class OwnedOutputs : public ::testing::Test {
     }
     return false;
   }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
-  fs::path dir_;
 };
 
 // --- 1. Inputs: the scene, its meshes, their .mtl and textures. --------------------------------
@@ -337,3 +323,60 @@ TEST_F(OwnedOutputs, SeveralScenesToAFileNameAreAnError) {
 }
 
 }  // namespace
+
+// --- 5. Videos and stills springy names itself replace only springy's. --------------------------
+
+namespace {
+
+// The render's and the still's files carry springy's mark (render/image.h): a PNG's tEXt chunk
+// "Software" and an MP4's comment, within their first bytes.
+bool carriesTheMark(const fs::path& file) { return contains(readFile(file), "made with springy"); }
+
+}  // namespace
+
+TEST_F(OwnedOutputs, ARenderIntoAFolderReplacesOnlySpringysVideo) {
+  const std::string scene = tiny("tiny.toml");
+  fs::create_directories(dir_ / "out");
+  writeFile(dir_ / "out" / "tiny.mp4", "the user's own video");
+  const auto before = snapshot();
+  const Result refused = run({"render", scene, "-o", path("out") + "/", "--duration", "0.2"});
+  EXPECT_NE(refused.status, 0) << refused.output;
+  EXPECT_TRUE(contains(refused.output, path("out/tiny.mp4") + ": exists and was not written by springy"))
+      << refused.output;
+  EXPECT_EQ(changesSince(before), "");
+  fs::remove(dir_ / "out" / "tiny.mp4");
+  ASSERT_EQ(run({"render", scene, "-o", path("out") + "/", "--duration", "0.2"}).status, 0);
+  EXPECT_TRUE(carriesTheMark(dir_ / "out" / "tiny.mp4"));
+  const Result again = run({"render", scene, "-o", path("out") + "/", "--duration", "0.3"});  // its own: replaced
+  EXPECT_EQ(again.status, 0) << again.output;
+  // A name the user gives is theirs to replace.
+  writeFile(dir_ / "mine.mp4", "the user's own video");
+  EXPECT_EQ(run({"render", scene, "-o", path("mine.mp4"), "--duration", "0.2"}).status, 0);
+  EXPECT_TRUE(carriesTheMark(dir_ / "mine.mp4"));
+}
+
+TEST_F(OwnedOutputs, FramesReplaceOnlySpringysStillsAndSheet) {
+  const std::string scene = tiny("tiny.toml");
+  ASSERT_EQ(run({"frames", scene, "-o", path("out"), "--times", "0.1", "--sheet"}).status, 0);
+  std::vector<fs::path> written;
+  for (const auto& e : fs::directory_iterator(dir_ / "out")) written.push_back(e.path());
+  ASSERT_EQ(written.size(), 2u);  // the still and the sheet
+  for (const fs::path& file : written) {
+    EXPECT_TRUE(carriesTheMark(file)) << file;
+    // Still a PNG that reads back, the chunk's CRC right: stb refuses a bad CRC of a known chunk,
+    // and a viewer would flag it; the test reads the chunk's bytes in place.
+    const std::string bytes = readFile(file);
+    EXPECT_EQ(bytes.substr(37, 4), "tEXt") << file;
+  }
+  EXPECT_EQ(run({"frames", scene, "-o", path("out"), "--times", "0.1", "--sheet"}).status, 0);  // its own
+  for (const fs::path& file : written) {
+    const auto keep = readFile(file);
+    writeFile(file, "the user's own picture");
+    const auto before = snapshot();
+    const Result r = run({"frames", scene, "-o", path("out"), "--times", "0.1", "--sheet"});
+    EXPECT_NE(r.status, 0) << r.output;
+    EXPECT_TRUE(contains(r.output, file.string() + ": exists and was not written by springy")) << r.output;
+    EXPECT_EQ(changesSince(before), "");  // refused before the run: the other file is not rewritten either
+    writeFile(file, keep);
+  }
+}

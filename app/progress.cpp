@@ -67,11 +67,11 @@ void Progress::print(Clock::time_point now) {
     const int filled = static_cast<int>(fraction * width);
     for (int i = 0; i < width; ++i) bar[i] = i < filled ? '#' : '.';
     bar[width] = 0;
-    std::fprintf(stderr, "\r%s [%s] %ld/%ld %s, %s, %s   ", label_.c_str(), bar, done_, total_, unit_.c_str(), times,
-                 detail.c_str());
+    std::fprintf(stderr, "\r%s [%s] %ld/%ld %s, %s%s%s   ", label_.c_str(), bar, done_, total_, unit_.c_str(), times,
+                 detail.empty() ? "" : ", ", detail.c_str());
   } else {
-    std::fprintf(stderr, "%s: %ld/%ld %s (%.0f%%), %s, %s\n", label_.c_str(), done_, total_, unit_.c_str(),
-                 100.0 * fraction, times, detail.c_str());
+    std::fprintf(stderr, "%s: %ld/%ld %s (%.0f%%), %s%s%s\n", label_.c_str(), done_, total_, unit_.c_str(),
+                 100.0 * fraction, times, detail.empty() ? "" : ", ", detail.c_str());
   }
   std::fflush(stderr);
 }

@@ -31,11 +31,12 @@ struct TemporarySlot {
 TemporarySlot temporaries[64];
 
 // Removes `name` under the directory `parent` and, for a folder, everything in it, with system
-// calls only (async-signal-safe: for a signal handler).
-void removeNow(int parent, const char* name, int depth) {
-  if (::unlinkat(parent, name, 0) == 0 || (errno != EISDIR && errno != EPERM) || depth > 32) return;
+// calls only (async-signal-safe: for a signal handler). True when it is gone.
+bool removeNow(int parent, const char* name, int depth) {
+  if (::unlinkat(parent, name, 0) == 0 || errno == ENOENT) return true;
+  if ((errno != EISDIR && errno != EPERM) || depth > 32) return false;
   const int fd = ::openat(parent, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
-  if (fd < 0) return;
+  if (fd < 0) return false;
   alignas(8) char entries[4096];
   for (bool removed = true; removed;) {  // from the start again after each batch: removal moves entries
     removed = false;
@@ -48,12 +49,12 @@ void removeNow(int parent, const char* name, int depth) {
       const char* entry = entries + at + 19;
       at += length;
       if (std::strcmp(entry, ".") == 0 || std::strcmp(entry, "..") == 0) continue;
-      removeNow(fd, entry, depth + 1);
-      removed = true;
+      // Only what went counts: an entry that cannot be removed would be read again for ever.
+      removed = removeNow(fd, entry, depth + 1) || removed;
     }
   }
   ::close(fd);
-  ::unlinkat(parent, name, AT_REMOVEDIR);
+  return ::unlinkat(parent, name, AT_REMOVEDIR) == 0;
 }
 
 // The signals that end the process at once, and what they did before springy's handler.
@@ -163,7 +164,12 @@ void installInterruptHandler() {
   sigemptyset(&fatal.sa_mask);
   for (const int signal : kFatalSignals) {
     if (::sigaction(signal, nullptr, &previousActions[signal]) != 0) continue;
-    if (previousActions[signal].sa_handler == SIG_IGN) continue;  // ignored by the parent: stays so
+    // Ignored by the parent stays so. A fault is chained to the handler before (a sanitizer's
+    // report); any other signal is taken only over the default action (which ends the process),
+    // so that a handler someone else set (a profiler's SIGPROF) keeps its signal not fatal.
+    const bool fault = signal == SIGSEGV || signal == SIGBUS || signal == SIGFPE || signal == SIGILL;
+    if (previousActions[signal].sa_handler == SIG_IGN) continue;
+    if (!fault && previousActions[signal].sa_handler != SIG_DFL) continue;
     ::sigaction(signal, &fatal, nullptr);
   }
 }
@@ -190,15 +196,6 @@ std::string firstBytes(const std::string& path, std::size_t count) {
   ::close(fd);
   bytes.resize(got);
   return bytes;
-}
-
-void refuseUnlessSpringys(const std::string& path, std::string_view header, const std::string& whose) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return;  // nothing there (or nothing readable: AtomicFile says why)
-  if (S_ISREG(st.st_mode) && firstBytes(path, header.size()) == header) return;
-  throw Error(path + ": exists and was not written by springy (it does not begin with \"" +
-              std::string(header.substr(0, header.find('\0'))) + "\"); " + whose +
-              ": refusing to replace it. Move it away, or name another output");
 }
 
 void refuseUnlessMarked(const std::string& path, std::string_view mark, std::size_t within, const std::string& whose) {

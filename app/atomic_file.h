@@ -64,15 +64,11 @@ class AtomicFile {
 // is the input file 'INPUT'; refusing to write over it". An output never replaces what it is made from.
 void refuseInputs(const std::string& target, const std::vector<std::string>& inputs);
 
-// For a file a command writes without the user naming it (an export's companion: a point cache's
-// .obj and .mtl): an existing `path` is replaced only if springy wrote it, which it tells by its
-// first bytes (`header`, e.g. "# springy export"). Otherwise throws springy::Error "PATH: exists
-// and was not written by springy (...); `whose`; move it away or ...".
-void refuseUnlessSpringys(const std::string& path, std::string_view header, const std::string& whose);
-// The same for a file whose mark is not at its start (springy's videos and stills carry
-// render/image.h kSpringyMark in their first `within` bytes): an existing `path` is replaced only
-// if those bytes hold `mark`. Throws springy::Error "PATH: exists and was not written by springy
-// ...; `whose`; ...".
+// For a file a command writes without the user naming it (an export's companions, render's
+// SCENE.mp4, frames' stills): an existing `path` is replaced only if springy wrote it, which it
+// tells by `mark` within the file's first `within` bytes (an export's header line "# springy
+// export"; render/image.h kSpringyMark in springy's videos and stills). Throws springy::Error
+// "PATH: exists and was not written by springy ...; `whose`; ...".
 void refuseUnlessMarked(const std::string& path, std::string_view mark, std::size_t within, const std::string& whose);
 // The first `count` bytes of `path` ("" when it cannot be read).
 std::string firstBytes(const std::string& path, std::size_t count);

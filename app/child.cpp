@@ -76,6 +76,16 @@ pid_t startChild(const std::string& exe, const std::vector<std::string>& args, c
     // Only async-signal-safe calls from here to execve: this process may have other threads.
     // PR_SET_PDEATHSIG: SIGTERM when springy ends (its interrupt handler cleans up); springy may
     // have ended before the call, so the parent is checked after it (then it was reparented).
+    // springy's own handlers first go back to the default: a SIGTERM caught here before execve
+    // would only set springy's flag in this copy and be lost for the program started. SIGPIPE and
+    // SIGXFSZ, which springy ignores for its own writes, are the program's to handle.
+    struct sigaction byDefault {};
+    byDefault.sa_handler = SIG_DFL;
+    for (const int s : {SIGINT, SIGTERM, SIGPIPE, SIGXFSZ}) ::sigaction(s, &byDefault, nullptr);
+    struct sigaction hangup {};
+    if (::sigaction(SIGHUP, nullptr, &hangup) == 0 && hangup.sa_handler != SIG_IGN) {  // nohup: stays ignored
+      ::sigaction(SIGHUP, &byDefault, nullptr);
+    }
     if (::prctl(PR_SET_PDEATHSIG, SIGTERM) != 0 || ::getppid() != parent) ::_exit(127);
     sigset_t none;
     sigemptyset(&none);

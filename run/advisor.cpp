@@ -272,9 +272,12 @@ bool retryDefaultStep(const std::string& path, SceneDesc& scene, const Failure& 
   if (!untried || failure.criterion) return false;
   untried = false;
   // What the scene did to the body (Failure::cause) is no step's to fix: said at once, rather
-  // than tried at ever more substeps.
+  // than tried at ever more substeps; the failure stays the run's (its record, Python's
+  // Unstable), as any other that no step fixes.
   if (!failure.cause.empty()) {
-    throw Error(path + ": the default step was not tried further: " + failure.message);
+    log << "springy: " << path << ": the default step was not tried further: the scene drives the failure ("
+        << failure.cause << ")\n";
+    return false;
   }
   char after[64];
   std::snprintf(after, sizeof after, "after t = %.3g s", failure.time);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -237,6 +238,28 @@ bool sweepsNear(const TriangleCollider& c, double t0, double t1, const Bounds& b
   return true;
 }
 
+// Whether a moving plane came within `margin` of the body's bounds over [t0, t1]: its placement
+// at rest moved by its translation at t0, t1 and the keyframes between, widened by its
+// oscillation's reach (a plane far from the body drives nothing there; its spin is left out).
+bool planeNear(const PlaneCollider& plane, double t0, double t1, const Bounds& body, double margin) {
+  const Vec3 centre = (body.lo + body.hi) * 0.5;
+  const Vec3 half = (body.hi - body.lo) * 0.5;
+  const Vec3 n = plane.normal;
+  const double reach = std::abs(n.x) * half.x + std::abs(n.y) * half.y + std::abs(n.z) * half.z + margin +
+                       length(plane.motion.amplitude);
+  std::vector<double> times = {t0, t1};
+  for (const Movement::Key& k : plane.motion.keys) {
+    if (k.time > t0 && k.time < t1) times.push_back(k.time);
+  }
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // signed distances of the centre
+  for (double t : times) {
+    const double d = dot(centre - (plane.point + plane.motion.translation(t)), n);
+    lo = std::min(lo, d);
+    hi = std::max(hi, d);
+  }
+  return lo <= reach && hi >= -reach;
+}
+
 // Step of sceneCause: the moving colliders and the body's pins, each as fast as it goes over
 // [since, now] against the body's speed.
 void movingDrives(const World& world, uint32_t body, double since, const BodyResponse& response,
@@ -257,8 +280,10 @@ void movingDrives(const World& world, uint32_t body, double since, const BodyRes
     }
   };
   for (std::size_t p = 0; p < model.colliders.planes.size(); ++p) {
-    const Movement& motion = model.colliders.planes[p].motion;
-    if (motion.moves()) consider(motion, "[[plane]] #" + std::to_string(p + 1));
+    const PlaneCollider& plane = model.colliders.planes[p];
+    if (plane.motion.moves() && planeNear(plane, since, now, bounds, info.restSize)) {
+      consider(plane.motion, "[[plane]] #" + std::to_string(p + 1));
+    }
   }
   for (const TriangleCollider& c : model.colliders.meshes) {
     if (c.motion.moves() && sweepsNear(c, since, now, bounds, info.restSize)) consider(c.motion, "collider '" + c.name + "'");

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -15,6 +16,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string>
 #include <system_error>
 #include <vector>
 
@@ -85,12 +87,44 @@ Listing listFolder(const std::string& root, const std::string& marker, const std
   return out;
 }
 
+// A path as one word at the end of a line of the list: '%' and every byte below '!' (a line
+// break, a leading space) as %XX, so that any name a scene gives (a report's subfolder is named
+// after its scene) reads back as it was.
+std::string escapedPath(const std::string& path) {
+  std::string out;
+  for (const char c : path) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte > ' ' && c != '%') {
+      out += c;
+      continue;
+    }
+    char hex[4];
+    std::snprintf(hex, sizeof hex, "%%%02X", byte);
+    out += hex;
+  }
+  return out;
+}
+
+std::string unescapedPath(const std::string& word) {
+  std::string out;
+  for (std::size_t i = 0; i < word.size(); ++i) {
+    if (word[i] == '%' && i + 2 < word.size() && std::isxdigit(static_cast<unsigned char>(word[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(word[i + 2]))) {
+      out += static_cast<char>(std::stoi(word.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += word[i];
+    }
+  }
+  return out;
+}
+
 std::string listingText(const Listing& listing) {
   std::string text = kListHeader;
   for (const auto& [path, e] : listing) {
-    if (e.kind == Entry::Kind::Folder) text += "folder " + path + "\n";
+    if (e.kind == Entry::Kind::Folder) text += "folder " + escapedPath(path) + "\n";
     if (e.kind == Entry::Kind::File) {
-      text += "file " + std::to_string(e.size) + " " + std::to_string(e.hash) + " " + path + "\n";
+      text += "file " + std::to_string(e.size) + " " + std::to_string(e.hash) + " " + escapedPath(path) + "\n";
     }
   }
   return text;
@@ -122,7 +156,7 @@ std::optional<Listing> readListing(const std::string& markerPath) {
     }
     std::string path;
     std::getline(words >> std::ws, path);
-    if (!path.empty()) out[path] = e;
+    if (!path.empty()) out[unescapedPath(path)] = e;
   }
   return out;
 }

@@ -380,3 +380,15 @@ TEST_F(OwnedOutputs, FramesReplaceOnlySpringysStillsAndSheet) {
     writeFile(file, keep);
   }
 }
+
+// A report's subfolder is named after its scene, whatever the name holds: the folder's list reads
+// such names back (a line break in the name split the list's line, so the next report refused
+// its own folder as a user's).
+TEST_F(OwnedOutputs, AReportOfAnOddlyNamedSceneReplacesItsOwnFolder) {
+  const std::string scene = tiny(" odd\nname %41.toml");
+  const Result first = run({"report", scene, "-o", path("r"), "--duration", "0.3"});
+  ASSERT_EQ(first.status, 0) << first.output;
+  EXPECT_TRUE(fs::is_directory(dir_ / "r" / " odd\nname %41")) << first.output;
+  const Result second = run({"report", scene, "-o", path("r"), "--duration", "0.3"});
+  EXPECT_EQ(second.status, 0) << second.output;
+}

@@ -122,28 +122,21 @@ TEST_F(MonitorBad, TheDefaultStepIsNotRetriedForWhatTheSceneDid) {
   EXPECT_LACKS(r.output, "trying ");
 }
 
+// A soft ball resting on a ground that moves as `motion` says ([plane.motion] lines); `scene`:
+// the [scene] table's lines.
+std::string ballOnAMovingGround(const std::string& scene, const std::string& motion) {
+  return "[scene]\n" + scene +
+         "\n[[body]]\nname = \"ball\"\nshape = \"icosphere\"\nsubdivisions = 2\nradius = 0.5\n"
+         "position = [0.0, 0.52, 0.0]\nmass = 1.0\n\n[[plane]]\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 1.0, 0.0]\n\n"
+         "[plane.motion]\n" +
+         motion;
+}
+
 TEST_F(MonitorBad, AGroundVibratingFasterThanTheBodyIsNotBlamedOnTheStep) {
   // The ground oscillates by 1 m at 10 kHz: 6.3e4 m/s. At f797dd4 the default step was doubled
   // four times (8 to 64 substeps) before it said so, and its advice was a smaller dt.
-  const std::string path = write("vibrating.toml", R"([scene]
-duration = 0.5
-
-[[body]]
-name = "ball"
-shape = "icosphere"
-subdivisions = 2
-radius = 0.5
-position = [0.0, 0.52, 0.0]
-mass = 1.0
-
-[[plane]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 1.0, 0.0]
-
-[plane.motion]
-oscillate = [0.0, 1.0, 0.0]
-frequency = 1e4
-)");
+  const std::string path =
+      write("vibrating.toml", ballOnAMovingGround("duration = 0.5\n", "oscillate = [0.0, 1.0, 0.0]\nfrequency = 1e4\n"));
   const CommandResult r = runSpringy("check " + path);
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_HAS(r.output, "A smaller step does not fix it: [[plane]] #1 moving at 6.283e+04 m/s (it oscillates by 1 m at "
@@ -154,25 +147,9 @@ frequency = 1e4
 TEST_F(MonitorBad, TheAdaptiveStepAtAKeyframeJumpNamesTheJump) {
   // The ground jumps 0.3 m in 1e-13 s: the adaptive step shrinks to nothing there. At f797dd4 the
   // message asked for a larger tolerance only.
-  const std::string path = write("jump.toml", R"([scene]
-duration = 0.3
-tolerance = 1e-4
-
-[[body]]
-name = "ball"
-shape = "icosphere"
-subdivisions = 2
-radius = 0.5
-position = [0.0, 0.52, 0.0]
-mass = 1.0
-
-[[plane]]
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 1.0, 0.0]
-
-[plane.motion]
-keys = [[0.1, 0.0, 0.0, 0.0], [0.1000000000001, 0.0, 0.3, 0.0]]
-)");
+  const std::string path =
+      write("jump.toml", ballOnAMovingGround("duration = 0.3\ntolerance = 1e-4\n",
+                                             "keys = [[0.1, 0.0, 0.0, 0.0], [0.1000000000001, 0.0, 0.3, 0.0]]\n"));
   const CommandResult r = runSpringy("check " + path);
   EXPECT_EQ(r.status, 1) << r.output;
   EXPECT_HAS(r.output, "the adaptive step fell below");

@@ -1,16 +1,23 @@
 #include "app/atomic_file.h"
 
-#include <atomic>
-#include <cerrno>
-#include <climits>
-#include <iterator>
-#include <csignal>
-#include <cstdio>
-#include <cstring>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <sys/syscall.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <climits>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <iterator>
+#include <map>
+#include <sstream>
+#include <vector>
 
 #include "sim/error.h"
 
@@ -172,6 +179,143 @@ void installInterruptHandler() {
     if (!fault && previousActions[signal].sa_handler != SIG_DFL) continue;
     ::sigaction(signal, &fatal, nullptr);
   }
+}
+
+std::uint64_t contentHash(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return 0;
+  std::vector<unsigned char> buffer(1 << 20);
+  std::uint64_t h = 14695981039346656037ULL;
+  for (;;) {
+    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    std::size_t k = 0;
+    for (; k + 8 <= static_cast<std::size_t>(n); k += 8) {
+      std::uint64_t word = 0;
+      std::memcpy(&word, buffer.data() + k, 8);
+      h = (h ^ word) * 1099511628211ULL;
+    }
+    for (; k < static_cast<std::size_t>(n); ++k) h = (h ^ buffer[k]) * 1099511628211ULL;
+  }
+  ::close(fd);
+  return h;
+}
+
+std::string escapedPath(const std::string& path) {
+  std::string out;
+  for (const char c : path) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte > ' ' && c != '%') {
+      out += c;
+      continue;
+    }
+    char hex[4];
+    std::snprintf(hex, sizeof hex, "%%%02X", byte);
+    out += hex;
+  }
+  return out;
+}
+
+std::string unescapedPath(const std::string& word) {
+  std::string out;
+  for (std::size_t i = 0; i < word.size(); ++i) {
+    if (word[i] == '%' && i + 2 < word.size() && std::isxdigit(static_cast<unsigned char>(word[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(word[i + 2]))) {
+      out += static_cast<char>(std::stoi(word.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += word[i];
+    }
+  }
+  return out;
+}
+
+namespace {
+
+constexpr const char* kOwnedRecord = ".springy-files";
+constexpr const char* kOwnedHeader =
+    "# The files springy wrote in this folder, by name: size, a hash of the bytes, the name. springy\n"
+    "# replaces only these (as they were); any other file of a name it writes here stops it.\n";
+
+// The record of `folder`: name -> (size, hash).
+std::map<std::string, std::pair<std::uintmax_t, std::uint64_t>> readOwned(const std::string& folder) {
+  std::map<std::string, std::pair<std::uintmax_t, std::uint64_t>> out;
+  std::istringstream lines(firstBytes(folder + "/" + kOwnedRecord, std::size_t{16} << 20));
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream words(line);
+    std::uintmax_t size = 0;
+    std::uint64_t hash = 0;
+    std::string name;
+    if (words >> size >> hash >> name) out[unescapedPath(name)] = {size, hash};
+  }
+  return out;
+}
+
+std::string folderOf(const std::string& path) {
+  const std::string dir = directoryOf(path);
+  return dir.empty() ? std::string(".") : dir.substr(0, dir.size() - 1);
+}
+
+bool owned(const std::map<std::string, std::pair<std::uintmax_t, std::uint64_t>>& record, const std::string& path,
+           const struct stat& st) {
+  const auto it = record.find(baseNameOf(path));
+  return it != record.end() && it->second.first == static_cast<std::uintmax_t>(st.st_size) &&
+         it->second.second == contentHash(path);
+}
+
+}  // namespace
+
+void refuseUnlessOwned(const std::string& path, const std::string& whose) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return;
+  if (S_ISREG(st.st_mode) && owned(readOwned(folderOf(path)), path, st)) return;
+  throw Error(path + ": exists and was not written by springy (or changed since: " + folderOf(path) + "/" +
+              kOwnedRecord + " does not list it as it is); " + whose +
+              ": refusing to replace it. Move it away, or name another output folder");
+}
+
+void refuseUnownedIn(const std::string& folder, const std::function<bool(const std::string&)>& writes,
+                     const std::string& whose) {
+  std::error_code error;
+  std::vector<std::string> foreign;
+  const auto record = readOwned(folder);
+  for (std::filesystem::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (!writes(name)) continue;
+    struct stat st {};
+    const std::string path = it->path().string();
+    if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || !owned(record, path, st)) foreign.push_back(name);
+  }
+  if (foreign.empty()) return;
+  std::sort(foreign.begin(), foreign.end());
+  std::string list;
+  for (std::size_t k = 0; k < foreign.size() && k < 10; ++k) list += (k ? ", " : "") + foreign[k];
+  if (foreign.size() > 10) list += " and " + std::to_string(foreign.size() - 10) + " more";
+  throw Error(folder + ": holds files of the names " + whose + " that springy did not write (or that changed since: " +
+              kOwnedRecord + " does not list them as they are): " + list +
+              "; refusing to replace them. Move them away, or name another output folder");
+}
+
+void recordOwned(const std::string& path) {
+  const std::string folder = folderOf(path);
+  auto record = readOwned(folder);
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return;
+  record[baseNameOf(path)] = {static_cast<std::uintmax_t>(st.st_size), contentHash(path)};
+  std::string text = kOwnedHeader;
+  for (const auto& [name, entry] : record) {
+    text += std::to_string(entry.first) + " " + std::to_string(entry.second) + " " + escapedPath(name) + "\n";
+  }
+  writeFileAtomically(folder + "/" + kOwnedRecord, text);
+}
+
+void writeOwnedFile(const std::string& path, std::string_view text, const std::string& whose) {
+  refuseUnlessOwned(path, whose);
+  writeFileAtomically(path, text);
+  recordOwned(path);
 }
 
 void refuseInputs(const std::string& target, const std::vector<std::string>& inputs) {

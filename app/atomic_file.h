@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -70,6 +71,28 @@ void refuseInputs(const std::string& target, const std::vector<std::string>& inp
 // export"; render/image.h kSpringyMark in springy's videos and stills). Throws springy::Error
 // "PATH: exists and was not written by springy ...; `whose`; ...".
 void refuseUnlessMarked(const std::string& path, std::string_view mark, std::size_t within, const std::string& whose);
+// Files springy writes under names of its own in a folder the user also keeps files in (a study's
+// pages in docs/, a sweep's tables): the folder's record ".springy-files" lists each by name with
+// its size and a hash of its bytes. refuseUnlessOwned: an existing `path` is replaced only when the
+// record lists it as it is (throws springy::Error naming it, `whose` saying who writes the name);
+// refuseUnownedIn: before a run, every file of `folder` whose name `writes` would write must be
+// so listed (the error lists those that are not); recordOwned: lists `path` as it is now;
+// writeOwnedFile: all three around an atomic write.
+void refuseUnlessOwned(const std::string& path, const std::string& whose);
+void refuseUnownedIn(const std::string& folder, const std::function<bool(const std::string&)>& writes,
+                     const std::string& whose);
+void recordOwned(const std::string& path);
+void writeOwnedFile(const std::string& path, std::string_view text, const std::string& whose);
+
+// A hash of a file's bytes (FNV-1a over 8-byte words, then the tail), 0 when it cannot be read:
+// its bytes, not its time, so that a folder copied elsewhere keeps its records.
+std::uint64_t contentHash(const std::string& path);
+// A name as one word at the end of a line of a record: '%' and every byte below '!' (a line
+// break, a leading space) as %XX, so that any name (a report's subfolder is named after its
+// scene) reads back as it was.
+std::string escapedPath(const std::string& path);
+std::string unescapedPath(const std::string& word);
+
 // The first `count` bytes of `path` ("" when it cannot be read).
 std::string firstBytes(const std::string& path, std::size_t count);
 

@@ -42,30 +42,6 @@ constexpr const char* kListHeader =
     "# What springy wrote here. Anything else (or a file changed since) is kept: springy will not replace\n"
     "# the folder while it holds one.\n";
 
-// A hash of the file's bytes (FNV-1a over 8-byte words, then the tail), 0 when it cannot be read.
-// Its bytes, not its time: a folder copied elsewhere keeps its list, and the same run writes the
-// same marker.
-std::uint64_t contentHash(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return 0;
-  std::vector<unsigned char> buffer(1 << 20);
-  std::uint64_t h = 14695981039346656037ULL;
-  for (;;) {
-    const ssize_t n = ::read(fd, buffer.data(), buffer.size());
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    std::size_t k = 0;
-    for (; k + 8 <= static_cast<std::size_t>(n); k += 8) {
-      std::uint64_t word = 0;
-      std::memcpy(&word, buffer.data() + k, 8);
-      h = (h ^ word) * 1099511628211ULL;
-    }
-    for (; k < static_cast<std::size_t>(n); ++k) h = (h ^ buffer[k]) * 1099511628211ULL;
-  }
-  ::close(fd);
-  return h;
-}
-
 // Everything under `root` but its marker, symbolic links not followed. Throws springy::Error.
 Listing listFolder(const std::string& root, const std::string& marker, const std::string& what) {
   Listing out;
@@ -84,38 +60,6 @@ Listing listFolder(const std::string& root, const std::string& marker, const std
     e.hash = contentHash(it->path().string());
   }
   if (error) throw Error(what + ": cannot list the folder " + root + ": " + error.message());
-  return out;
-}
-
-// A path as one word at the end of a line of the list: '%' and every byte below '!' (a line
-// break, a leading space) as %XX, so that any name a scene gives (a report's subfolder is named
-// after its scene) reads back as it was.
-std::string escapedPath(const std::string& path) {
-  std::string out;
-  for (const char c : path) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte > ' ' && c != '%') {
-      out += c;
-      continue;
-    }
-    char hex[4];
-    std::snprintf(hex, sizeof hex, "%%%02X", byte);
-    out += hex;
-  }
-  return out;
-}
-
-std::string unescapedPath(const std::string& word) {
-  std::string out;
-  for (std::size_t i = 0; i < word.size(); ++i) {
-    if (word[i] == '%' && i + 2 < word.size() && std::isxdigit(static_cast<unsigned char>(word[i + 1])) &&
-        std::isxdigit(static_cast<unsigned char>(word[i + 2]))) {
-      out += static_cast<char>(std::stoi(word.substr(i + 1, 2), nullptr, 16));
-      i += 2;
-    } else {
-      out += word[i];
-    }
-  }
   return out;
 }
 

@@ -233,9 +233,11 @@ void writeMaps(const std::vector<Row>& rows) {
     const render::Image image =
         drawMap(stem + ": stable, and the lowest volume", varying[0], varying[1], values[0], values[1], cells);
     const std::string file = "map-" + stem + ".png";
+    refuseUnlessOwned(file, "springy gather writes a map of that name");
     AtomicFile out(file);
     out.write(render::encodePng(image));
     out.commit();
+    recordOwned(file);
     std::printf("gather: %s\n", file.c_str());
   }
 }
@@ -257,8 +259,8 @@ std::size_t gatherSweep(const std::vector<SweepTask>& tasks) {
     }
     rows.push_back({&t, result ? std::move(*result) : Json()});
   }
-  writeFileAtomically("table.csv", csvTable(rows, pointKeys(tasks)));
-  writeFileAtomically("table.json", jsonTable(rows));
+  writeOwnedFile("table.csv", csvTable(rows, pointKeys(tasks)), "springy gather writes a file of that name");
+  writeOwnedFile("table.json", jsonTable(rows), "springy gather writes a file of that name");
 #ifdef SPRINGY_HAVE_IMAGES
   writeMaps(rows);
 #endif

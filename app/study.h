@@ -41,12 +41,15 @@ std::string machine();
 // printf's formatting of one number.
 std::string fmt(const char* format, double value);
 
-// Writes text to path atomically.
+// Writes text to path atomically, over a file of that name only if springy wrote it (the folder's
+// record, app/atomic_file.h writeOwnedFile), and records it.
 void writeFile(const fs::path& path, const std::string& text);
 
 // The study's output directory, created when missing; an existing file of that name, or no
-// permission, is a springy::Error naming it.
-void makeOutputDirectory(const fs::path& out);
+// permission, is a springy::Error naming it. Before the run: every file there of a name the study
+// `kind` writes (accuracy*, accuracy-contact*, stability*) must be springy's, as the folder's
+// record lists it, or springy::Error lists those that are not.
+void makeOutputDirectory(const fs::path& out, const std::string& kind);
 
 // A scene shipped in scenes/, by name; the scenes a study names, or else the eight showcase scenes.
 std::string bundledScene(const char* name);

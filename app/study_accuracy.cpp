@@ -399,7 +399,7 @@ std::string dampingSection(const AccuracyCase& undamped, const std::vector<Loss>
 
 int runAccuracy(const StudyOptions& o) {
   const fs::path out = o.output;
-  makeOutputDirectory(out);
+  makeOutputDirectory(out, "accuracy");
   std::string skipped;
   const std::vector<AccuracyCase> cases = accuracyCases(o, skipped);
   const int repeats = std::max(1, o.quick ? 1 : o.repeats);

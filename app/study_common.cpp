@@ -54,9 +54,21 @@ std::string fmt(const char* f, double v) {
   return buf;
 }
 
-void writeFile(const fs::path& path, const std::string& text) { writeFileAtomically(path.string(), text); }
+void writeFile(const fs::path& path, const std::string& text) {
+  writeOwnedFile(path.string(), text, "springy study writes a file of that name");
+}
 
-void makeOutputDirectory(const fs::path& out) { makeDirectories(out.string(), "-o"); }
+void makeOutputDirectory(const fs::path& out, const std::string& kind) {
+  makeDirectories(out.string(), "-o");
+  // Its pages share the folder with others (-o docs): before the run, every file of a name this
+  // study writes must be one springy wrote (the folder's record), not the user's.
+  const auto writes = [&](const std::string& name) {
+    const bool contact = name.rfind("accuracy-contact", 0) == 0;
+    return kind == "contact" ? contact : !contact && name.rfind(kind, 0) == 0;
+  };
+  refuseUnownedIn(out.string(), writes, "springy study " + kind + " writes (" +
+                                            (kind == "contact" ? std::string("accuracy-contact") : kind) + "*)");
+}
 
 std::string bundledScene(const char* name) {
   return (fs::path(SPRINGY_SCENES_DIR) / (std::string(name) + ".toml")).string();
@@ -99,7 +111,10 @@ std::string errorPlot(const fs::path& out, const std::string& file, const std::s
   gp << "\n";
   writeFile(out / (file + ".gp"), gp.str());
   if (!haveGnuplot()) return "(gnuplot not found: plot skipped; install gnuplot-nox)\n\n";
+  const std::string png = (out / (file + ".png")).string();
+  refuseUnlessOwned(png, "springy study's gnuplot writes a plot of that name");
   runGnuplot(out / (file + ".gp"));
+  recordOwned(png);
   return "![" + title + "](" + file + ".png)\n\n";
 }
 

@@ -288,7 +288,7 @@ std::string sceneSection(const fs::path& out, const SceneRuns& s, std::ostringst
 
 int runContact(const StudyOptions& o) {
   const fs::path out = o.output;
-  makeOutputDirectory(out);
+  makeOutputDirectory(out, "contact");
   const std::vector<double> tolerances =
       o.quick ? std::vector<double>{1e-3, 1e-4} : std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7};
   const std::string md = contactIntroduction(o);

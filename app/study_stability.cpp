@@ -322,7 +322,7 @@ std::string caseRowText(const CaseRow& r, std::ostringstream& csv) {
 
 int runStability(const StudyOptions& o) {
   const fs::path out = o.output;
-  makeOutputDirectory(out);
+  makeOutputDirectory(out, "stability");
   const double horizon = o.quick ? 0.05 : 0.2;
   const int iterations = o.quick ? 4 : 8;
   std::ostringstream csv, refused, descriptions, csvRuns;

@@ -625,15 +625,17 @@ int submitToSlurm(const SweepOptions& options, const std::vector<SweepTask>& tas
   // Slurm's filename patterns: %a the array index, %4a zero-padded to four digits (sbatch(1)), so
   // a task's log is logs/NNNN.log as with the local runner. run-task reads the index from
   // SLURM_ARRAY_TASK_ID and its threads from SLURM_CPUS_PER_TASK.
-  writeFileAtomically("slurm/array.sh", "#!/bin/sh\n#SBATCH --job-name=springy-sweep\n#SBATCH --array=0-" +
+  writeOwnedFile("slurm/array.sh", "#!/bin/sh\n#SBATCH --job-name=springy-sweep\n#SBATCH --array=0-" +
                                             std::to_string(tasks.size() - 1) + "%" + std::to_string(k) +
                                             "\n#SBATCH --cpus-per-task=" + std::to_string(options.cpusPerTask) +
                                             "\n#SBATCH --ntasks=1\n#SBATCH --output=logs/%4a.log\nexec " + exe +
-                                            " run-task manifest.jsonl\n");
-  writeFileAtomically("slurm/gather.sh",
-                      "#!/bin/sh\n#SBATCH --job-name=springy-gather\n#SBATCH --ntasks=1\n"
-                      "#SBATCH --output=logs/gather.log\nexec " +
-                          exe + " gather manifest.jsonl\n");
+                                            " run-task manifest.jsonl\n",
+                 "springy sweep writes a file of that name");
+  writeOwnedFile("slurm/gather.sh",
+                 "#!/bin/sh\n#SBATCH --job-name=springy-gather\n#SBATCH --ntasks=1\n"
+                 "#SBATCH --output=logs/gather.log\nexec " +
+                     exe + " gather manifest.jsonl\n",
+                 "springy sweep writes a file of that name");
   std::vector<std::string> submit = {"--parsable"};
   submit.insert(submit.end(), options.sbatchArgs.begin(), options.sbatchArgs.end());
   std::vector<std::string> submitArray = submit;
@@ -644,7 +646,7 @@ int submitToSlurm(const SweepOptions& options, const std::vector<SweepTask>& tas
   std::vector<std::string> submitGather = submit;
   submitGather.insert(submitGather.end(), {"--dependency=afterok:" + array, "slurm/gather.sh"});
   const std::string gather = jobId(runSbatch(submitGather, ""), "sbatch slurm/gather.sh");
-  writeFileAtomically("slurm/jobs", "array " + array + "\ngather " + gather + "\n");
+  writeOwnedFile("slurm/jobs", "array " + array + "\ngather " + gather + "\n", "springy sweep writes a file of that name");
   std::printf(
       "sweep: submitted job array %s (%zu tasks, at most %u at once, %u cpus each) and gather job %s (after "
       "it); the table will be %s/table.csv\n",
@@ -863,6 +865,27 @@ std::optional<Json> finishedResult(const SweepTask& task) {
   return std::nullopt;
 }
 
+namespace {
+
+// Before a sweep plans anything in its folder (the working directory): the files of the names it
+// writes there (manifest.jsonl, table.csv, table.json, map-*.png, and slurm/'s scripts when it
+// submits) must be springy's, as the folder's record lists them (app/atomic_file.h).
+void refuseOthersSweepFiles(bool slurm) {
+  const auto top = [](const std::string& name) {
+    return name == "manifest.jsonl" || name == "table.csv" || name == "table.json" ||
+           (name.rfind("map-", 0) == 0 && name.size() > 8 && name.compare(name.size() - 4, 4, ".png") == 0);
+  };
+  refuseUnownedIn(".", top, "springy sweep writes (manifest.jsonl, table.csv, table.json, map-*.png)");
+  if (slurm && isDirectory("slurm")) {
+    const auto scripts = [](const std::string& name) {
+      return name == "array.sh" || name == "gather.sh" || name == "jobs";
+    };
+    refuseUnownedIn("slurm", scripts, "springy sweep --slurm writes (array.sh, gather.sh, jobs)");
+  }
+}
+
+}  // namespace
+
 int runSweep(const SweepOptions& options) {
   const fs::path specPath = fs::absolute(options.spec);
   const Spec spec = readSpec(options.spec);
@@ -879,6 +902,7 @@ int runSweep(const SweepOptions& options) {
     scenes.push_back(scene.lexically_relative(directory).string());
   }
   if (chdir(directory.c_str()) != 0) throw Error(output + ": cannot enter the directory: " + errorText(errno));
+  refuseOthersSweepFiles(options.slurm);
   std::vector<PlannedTask> planned = planTasks(spec, scenes);
   validateTasks(spec, planned);
   std::string manifest;
@@ -887,7 +911,7 @@ int runSweep(const SweepOptions& options) {
     manifest += manifestLine(p.task);
     tasks.push_back(std::move(p.task));
   }
-  writeFileAtomically("manifest.jsonl", manifest);
+  writeOwnedFile("manifest.jsonl", manifest, "springy sweep writes a file of that name");
   std::printf("sweep: %s/manifest.jsonl: %zu tasks (%s)\n", directory.c_str(), tasks.size(), spec.command.c_str());
   std::fflush(stdout);
   if (options.slurm) return submitToSlurm(options, tasks, directory.string());

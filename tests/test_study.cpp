@@ -357,3 +357,34 @@ TEST(Suggest, PredictsTheSquashAndPeriodsThatKeepTheVolume) {
 }
 
 }  // namespace
+
+// A study's pages share their folder with other files (-o docs): a file of a name the study
+// writes that springy did not write (the folder's record, .springy-files, does not list it as it
+// is) stops the study before it runs, the file kept; the study's own files are replaced.
+TEST(StudyOwnership, AUsersFileOfAStudysNameStopsItBeforeTheRunAndItsOwnAreReplaced) {
+  const fs::path dir = tempDir("owned");
+  const std::string study = "study contact --quick --max-duration 0.5 --scenes " + std::string(SPRINGY_SOURCE_DIR) +
+                            "/scenes/cube.toml -o " + dir.string();
+  std::ofstream(dir / "accuracy-contact.md") << "my notes";
+  std::ofstream(dir / "notes.md") << "another file: not the study's name";
+  const Result refused = run(study);
+  EXPECT_EQ(refused.status, 1) << refused.output;
+  EXPECT_NE(refused.output.find("that springy did not write"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find(": accuracy-contact.md;"), std::string::npos) << refused.output;
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}), 2);  // nothing written
+  std::ifstream in(dir / "accuracy-contact.md");
+  std::string kept;
+  std::getline(in, kept);
+  EXPECT_EQ(kept, "my notes");
+  fs::remove(dir / "accuracy-contact.md");
+  const Result first = run(study);
+  ASSERT_EQ(first.status, 0) << first.output;
+  const Result again = run(study);  // its own files, as it wrote them
+  EXPECT_EQ(again.status, 0) << again.output;
+  std::ifstream record(dir / ".springy-files");
+  std::stringstream listed;
+  listed << record.rdbuf();
+  EXPECT_NE(listed.str().find(" accuracy-contact.csv\n"), std::string::npos) << listed.str();
+  EXPECT_EQ(listed.str().find("notes.md"), std::string::npos) << listed.str();
+  fs::remove_all(dir);
+}

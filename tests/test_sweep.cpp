@@ -367,5 +367,22 @@ TEST_F(SweepTest, CheckJunitPassesAJunitConsumer) {
   EXPECT_NE(data[2]["message"].get<std::string>().find("broken.toml:2:1"), std::string::npos) << data[2];
 }
 
+// A sweep's folder holds files of names it writes (table.csv, ...) only as springy wrote them (the
+// folder's record): a user's table there stops the sweep before it plans anything, the file kept.
+TEST_F(SweepTest, AUsersTableInTheFolderStopsTheSweepBeforeItPlans) {
+  const fs::path spec = gridSpec("grid.toml", 0.3);
+  fs::create_directories(dir_ / "out");
+  writeFile(dir_ / "out" / "table.csv", "my table");
+  const auto r = runSpringy("sweep " + q(spec) + " -o " + q(dir_ / "out"));
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("that springy did not write"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(": table.csv;"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "manifest.jsonl"));
+  std::ifstream in(dir_ / "out" / "table.csv");
+  std::string kept;
+  std::getline(in, kept);
+  EXPECT_EQ(kept, "my table");
+}
+
 }  // namespace
 }  // namespace springy

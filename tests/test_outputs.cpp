@@ -314,9 +314,10 @@ TEST_F(OutputTest, ACameraAtItsTargetIsAnErrorNamingTheKeys) {
   writeFile(bad, text);
   Result s = run({"frames", bad.string(), "--times", "0", "-o", dir_.string()});
   EXPECT_EQ(s.status, 1) << s.output;
-  // Refused as the scene is read, at the key (issue 63).
-  EXPECT_TRUE(contains(s.output, bad.string() + ":")) << s.output;
-  EXPECT_TRUE(contains(s.output, "[render.camera] key 'target': position and target are the same point")) << s.output;
+  // Refused as the scene is read, at the key's line and column (issue 63).
+  EXPECT_TRUE(contains(s.output, bad.string() +
+                                     ":30:10: [render.camera] key 'target': position and target are the same point"))
+      << s.output;
   s = run({"render", bad.string(), "-o", (dir_ / "same.mp4").string()});
   EXPECT_EQ(s.status, 1) << s.output;
   EXPECT_TRUE(contains(s.output, "position and target are the same point")) << s.output;
